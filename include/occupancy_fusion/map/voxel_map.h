@@ -1,0 +1,198 @@
+// Sparse, block-allocated 3D log-odds voxel map with an explicit unknown state.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <shared_mutex>
+#include <utility>
+#include <vector>
+
+#include <tsl/robin_map.h>
+
+#include "occupancy_fusion/map/occupancy_model.h"
+
+namespace occupancy_fusion {
+
+using VoxelIndex = Eigen::Vector3i;  // floor(p / resolution), per axis
+using BlockIndex = Eigen::Vector3i;  // floor(voxel index / VoxelBlock::kSide), per axis
+
+// A dense cube of kSide^3 voxels. NaN log-odds marks a voxel that was never observed.
+struct VoxelBlock {
+  static constexpr int kSideLog2 = 3;
+  static constexpr int kSide = 1 << kSideLog2;
+  static constexpr int kVolume = kSide * kSide * kSide;
+  static constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
+
+  VoxelBlock() { log_odds.fill(kUnknown); }
+
+  // x fastest, so a sweep along x walks memory in order.
+  static int linearIndex(int x, int y, int z) { return x + kSide * (y + kSide * z); }
+  static int linearIndex(const Eigen::Vector3i& local) {
+    return linearIndex(local.x(), local.y(), local.z());
+  }
+  static Eigen::Vector3i localIndex(int linear) {
+    return {linear & (kSide - 1), (linear >> kSideLog2) & (kSide - 1), linear >> (2 * kSideLog2)};
+  }
+  static bool isKnown(float value) { return !std::isnan(value); }
+
+  // Adds delta to one voxel (unknown starts at the prior, 0) and clamps.
+  void update(int linear, float delta, const OccupancyModel& model) {
+    float& value = log_odds[linear];
+    if (!isKnown(value)) ++known_count;
+    value = model.updated(value, isKnown(value), delta);
+  }
+  void set(int linear, float value) {
+    if (isKnown(value) != isKnown(log_odds[linear])) known_count += isKnown(value) ? 1 : -1;
+    log_odds[linear] = value;
+  }
+
+  std::array<float, kVolume> log_odds;
+  int known_count = 0;
+  std::uint64_t version = 0;  // map version of the last write; maintained by VoxelMap
+};
+
+struct VoxelMapConfig {
+  double resolution = 0.05;           // m, edge of a voxel
+  OccupancyModel model;               // hit/miss/clamping
+  std::size_t max_memory_bytes = 0;   // 0: unbounded. See VoxelMap's memory bound.
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+struct VoxelUpdate {
+  VoxelIndex index;
+  float delta;  // log-odds increment
+};
+
+// Blocks written or removed after a given map version, for consumers that keep derived data
+// (published markers, the projected grid) up to date at a cost proportional to the change.
+struct MapChanges {
+  std::uint64_t version = 0;          // pass this to the next changesSince()
+  bool full_rebuild = false;          // the log no longer reaches back: rebuild from scratch
+  std::vector<BlockIndex> changed;    // written since (may include blocks removed later)
+  std::vector<BlockIndex> removed;    // cleared, evicted or reset since
+};
+
+struct VoxelCounts {
+  std::size_t occupied = 0;
+  std::size_t free = 0;
+  std::size_t unknown = 0;
+};
+
+// Thread safety: every public member function may be called from any thread. Reads take a
+// shared lock and writes an exclusive one, held for the whole call, so one call (a frame's
+// applyUpdates or updateBlocks) is atomic for readers. Several integrators may write at once:
+// their calls take turns on the lock. updateBlocks runs its callback on several threads at once
+// (OpenMP), each on a different block, while the caller's exclusive lock is held. Callbacks of
+// forEach* run under the shared lock: they must not call back into the map's write functions.
+//
+// Memory bound: after each write call, if memoryBytes() exceeds max_memory_bytes, the blocks
+// farthest from the focus (the last sensor origin given to setFocus) are dropped, their voxels
+// becoming unknown, until the map uses at most 90 % of the bound. Dropped blocks are counted in
+// evictedBlockCount() and reported as removed by changesSince().
+class VoxelMap {
+ public:
+  explicit VoxelMap(const VoxelMapConfig& config);  // validates config
+
+  const VoxelMapConfig& config() const { return config_; }
+  double resolution() const { return config_.resolution; }
+  const OccupancyModel& model() const { return config_.model; }
+
+  // Coordinates. Indices are valid for |coordinate| < kMaxCoordinateVoxels * resolution.
+  static constexpr int kMaxBlockCoordinate = (1 << 20) - 1;
+  static constexpr int kMaxCoordinateVoxels = kMaxBlockCoordinate * VoxelBlock::kSide;
+  VoxelIndex indexOf(const Eigen::Vector3d& point) const;
+  Eigen::Vector3d centerOf(const VoxelIndex& index) const;
+  bool isInRange(const Eigen::Vector3d& point) const;  // finite and representable
+  static BlockIndex blockOf(const VoxelIndex& index);
+  static int linearIndexInBlock(const VoxelIndex& index);
+  static VoxelIndex voxelIndex(const BlockIndex& block, int linear);
+
+  // Point queries.
+  std::optional<float> logOdds(const VoxelIndex& index) const;  // nullopt: unknown
+  Occupancy occupancy(const VoxelIndex& index) const;
+  Occupancy occupancyAt(const Eigen::Vector3d& point) const { return occupancy(indexOf(point)); }
+
+  // Writes.
+  void updateVoxel(const VoxelIndex& index, float delta);
+  void applyUpdates(const std::vector<VoxelUpdate>& updates);
+  void setLogOdds(const VoxelIndex& index, float log_odds);  // unclamped, for import
+  // Allocates the given blocks, then calls fn(block_index, block) for each, in parallel.
+  void updateBlocks(const std::vector<BlockIndex>& blocks,
+                    const std::function<void(const BlockIndex&, VoxelBlock&)>& fn);
+  // octomap_server's clear_bbx: every known voxel whose centre lies in [min, max] becomes free
+  // at the lower clamping bound. Returns the number of voxels changed.
+  std::size_t clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max);
+  void reset();
+  void setFocus(const Eigen::Vector3d& sensor_origin);
+
+  // Iteration (under the shared lock). fn(voxel index, log-odds).
+  using VoxelFn = std::function<void(const VoxelIndex&, float)>;
+  void forEachKnownVoxel(const VoxelFn& fn) const;
+  void forEachOccupiedVoxel(const VoxelFn& fn) const;
+  void forEachFreeVoxel(const VoxelFn& fn) const;
+  // Known voxels whose centres lie in [min, max].
+  void forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+                              const VoxelFn& fn) const;
+  VoxelCounts countInBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) const;
+  void forEachBlock(const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const;
+  // Copies one block; false if it is not allocated.
+  bool copyBlock(const BlockIndex& block, VoxelBlock* out) const;
+
+  // Change log for incremental consumers. Start with version 0 (a full rebuild).
+  MapChanges changesSince(std::uint64_t version) const;
+  std::uint64_t version() const;
+
+  // Accounting.
+  std::size_t blockCount() const;
+  std::size_t knownVoxelCount() const;
+  std::size_t memoryBytes() const;  // blocks, hash table and change log
+  std::size_t evictedBlockCount() const;
+
+ private:
+  struct BlockHash {
+    std::size_t operator()(std::uint64_t key) const;
+  };
+  using BlockTable = tsl::robin_map<std::uint64_t, std::unique_ptr<VoxelBlock>, BlockHash>;
+
+  static std::uint64_t packKey(const BlockIndex& block);
+  static BlockIndex unpackKey(std::uint64_t key);
+  VoxelBlock& blockForWrite(const BlockIndex& block);  // allocates; caller holds unique lock
+  const VoxelBlock* findBlock(const BlockIndex& block) const;
+  void markChanged(std::uint64_t key);
+  void markRemoved(std::uint64_t key);
+  void finishWrite();  // bumps the version, enforces the memory bound
+  void enforceMemoryBound();
+  std::size_t memoryBytesLocked() const;
+  void forEachVoxelIf(const VoxelFn& fn, int which) const;
+
+  VoxelMapConfig config_;
+  float min_log_odds_;
+  float max_log_odds_;
+  float threshold_log_odds_;
+
+  mutable std::shared_mutex mutex_;
+  BlockTable blocks_;
+  Eigen::Vector3d focus_ = Eigen::Vector3d::Zero();
+  std::uint64_t version_ = 1;
+  std::size_t evicted_blocks_ = 0;
+  // (version, packed block key, removed?) in version order; trimmed to kMaxChangeLog entries.
+  struct ChangeEntry {
+    std::uint64_t version;
+    std::uint64_t key;
+    bool removed;
+  };
+  std::deque<ChangeEntry> change_log_;
+  std::uint64_t change_log_start_ = 1;  // versions before this are no longer in the log
+  static constexpr std::size_t kMaxChangeLog = 1 << 20;
+};
+
+}  // namespace occupancy_fusion
