@@ -1,0 +1,44 @@
+#include "occupancy_fusion/params/config_readers.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace occupancy_fusion {
+namespace {
+
+constexpr double kBytesPerMebibyte = 1024.0 * 1024.0;
+
+std::size_t readMemoryBound(const ParameterSource& source) {
+  double megabytes = 0.0;
+  source.get("max_memory_mb", &megabytes);
+  if (!(megabytes >= 0.0) || !std::isfinite(megabytes)) {
+    throw std::invalid_argument("max_memory_mb must be >= 0 (0: unbounded), got " +
+                                std::to_string(megabytes));
+  }
+  return static_cast<std::size_t>(megabytes * kBytesPerMebibyte);
+}
+
+}  // namespace
+
+OccupancyModel readOccupancyModel(const ParameterSource& source) {
+  OccupancyModel model;
+  source.get("sensor_model/hit", &model.prob_hit);
+  source.get("sensor_model/miss", &model.prob_miss);
+  source.get("sensor_model/min", &model.clamp_min);
+  source.get("sensor_model/max", &model.clamp_max);
+  source.get("occupancy_threshold", &model.occupancy_threshold);
+  model.validate();  // its messages name the parameters above
+  return model;
+}
+
+VoxelMapConfig readVoxelMapConfig(const ParameterSource& source) {
+  VoxelMapConfig config;
+  source.get("resolution", &config.resolution);
+  config.model = readOccupancyModel(source);
+  config.max_memory_bytes = readMemoryBound(source);
+  config.validate();
+  return config;
+}
+
+}  // namespace occupancy_fusion
