@@ -18,11 +18,11 @@ inline double probabilityFromLogOdds(double log_odds) { return 1.0 / (1.0 + std:
 
 // Update and clamping parameters, OctoMap's defaults (octomap_server's sensor_model/*).
 struct OccupancyModel {
-  double prob_hit = 0.7;               // sensor_model/hit
-  double prob_miss = 0.4;              // sensor_model/miss
-  double clamp_min = 0.1192;           // sensor_model/min
-  double clamp_max = 0.971;            // sensor_model/max
-  double occupancy_threshold = 0.5;    // above: occupied, at or below: free
+  double prob_hit = 0.7;             // sensor_model/hit
+  double prob_miss = 0.4;            // sensor_model/miss
+  double clamp_min = 0.1192;         // sensor_model/min
+  double clamp_max = 0.971;          // sensor_model/max
+  double occupancy_threshold = 0.5;  // above: occupied, at or below: free
 
   // Throws std::invalid_argument naming the offending field.
   void validate() const;
@@ -34,11 +34,6 @@ struct OccupancyModel {
   float thresholdLogOdds() const { return logit(occupancy_threshold); }
 
   float clamp(float log_odds) const;
-  // Applies a log-odds increment to a current value (unknown counts as 0, the prior), Eq. of
-  // the recursive binary Bayes filter in log-odds form, then clamps.
-  float updated(float current, bool known, float delta) const {
-    return clamp((known ? current : 0.0f) + delta);
-  }
   Occupancy classify(float log_odds) const {
     return log_odds > thresholdLogOdds() ? Occupancy::kOccupied : Occupancy::kFree;
   }

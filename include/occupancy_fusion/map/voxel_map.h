@@ -43,11 +43,17 @@ struct VoxelBlock {
   }
   static bool isKnown(float value) { return !std::isnan(value); }
 
-  // Adds delta to one voxel (unknown starts at the prior, 0) and clamps.
-  void update(int linear, float delta, const OccupancyModel& model) {
+  // Adds delta to one voxel (an unknown voxel starts at the prior, 0) and clamps to
+  // [min_log_odds, max_log_odds] (VoxelMap::minLogOdds(), maxLogOdds()).
+  void update(int linear, float delta, float min_log_odds, float max_log_odds) {
     float& value = log_odds[linear];
-    if (!isKnown(value)) ++known_count;
-    value = model.updated(value, isKnown(value), delta);
+    float sum = delta;
+    if (isKnown(value)) {
+      sum += value;
+    } else {
+      ++known_count;
+    }
+    value = sum < min_log_odds ? min_log_odds : (sum > max_log_odds ? max_log_odds : sum);
   }
   void set(int linear, float value) {
     if (isKnown(value) != isKnown(log_odds[linear])) known_count += isKnown(value) ? 1 : -1;
@@ -60,9 +66,9 @@ struct VoxelBlock {
 };
 
 struct VoxelMapConfig {
-  double resolution = 0.05;           // m, edge of a voxel
-  OccupancyModel model;               // hit/miss/clamping
-  std::size_t max_memory_bytes = 0;   // 0: unbounded. See VoxelMap's memory bound.
+  double resolution = 0.05;          // m, edge of a voxel
+  OccupancyModel model;              // hit/miss/clamping
+  std::size_t max_memory_bytes = 0;  // 0: unbounded. See VoxelMap's memory bound.
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -75,10 +81,10 @@ struct VoxelUpdate {
 // Blocks written or removed after a given map version, for consumers that keep derived data
 // (published markers, the projected grid) up to date at a cost proportional to the change.
 struct MapChanges {
-  std::uint64_t version = 0;          // pass this to the next changesSince()
-  bool full_rebuild = false;          // the log no longer reaches back: rebuild from scratch
-  std::vector<BlockIndex> changed;    // written since (may include blocks removed later)
-  std::vector<BlockIndex> removed;    // cleared, evicted or reset since
+  std::uint64_t version = 0;        // pass this to the next changesSince()
+  bool full_rebuild = false;        // the log no longer reaches back: rebuild from scratch
+  std::vector<BlockIndex> changed;  // written since (may include blocks removed later)
+  std::vector<BlockIndex> removed;  // cleared, evicted or reset since
 };
 
 struct VoxelCounts {
@@ -94,7 +100,8 @@ struct VoxelCounts {
 // (OpenMP), each on a different block, while the caller's exclusive lock is held. Callbacks of
 // forEach* run under the shared lock: they must not call back into the map's write functions.
 //
-// Memory bound: after each write call, if memoryBytes() exceeds max_memory_bytes, the blocks
+// Memory bound: after each write call, if the voxel storage (blocks and hash table) exceeds
+// max_memory_bytes, the blocks
 // farthest from the focus (the last sensor origin given to setFocus) are dropped, their voxels
 // becoming unknown, until the map uses at most 90 % of the bound. Dropped blocks are counted in
 // evictedBlockCount() and reported as removed by changesSince().
@@ -105,6 +112,12 @@ class VoxelMap {
   const VoxelMapConfig& config() const { return config_; }
   double resolution() const { return config_.resolution; }
   const OccupancyModel& model() const { return config_.model; }
+  float minLogOdds() const { return min_log_odds_; }
+  float maxLogOdds() const { return max_log_odds_; }
+  float thresholdLogOdds() const { return threshold_log_odds_; }
+  Occupancy classify(float log_odds) const {
+    return log_odds > threshold_log_odds_ ? Occupancy::kOccupied : Occupancy::kFree;
+  }
 
   // Coordinates. Indices are valid for |coordinate| < kMaxCoordinateVoxels * resolution.
   static constexpr int kMaxBlockCoordinate = (1 << 20) - 1;
@@ -172,6 +185,7 @@ class VoxelMap {
   void finishWrite();  // bumps the version, enforces the memory bound
   void enforceMemoryBound();
   std::size_t memoryBytesLocked() const;
+  std::size_t storageBytesLocked() const;  // blocks and hash table: what the bound limits
   void forEachVoxelIf(const VoxelFn& fn, int which) const;
 
   VoxelMapConfig config_;

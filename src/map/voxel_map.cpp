@@ -1,0 +1,384 @@
+#include "occupancy_fusion/map/voxel_map.h"
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+namespace occupancy_fusion {
+namespace {
+
+constexpr int kKeyBits = 21;
+constexpr std::uint64_t kKeyMask = (std::uint64_t{1} << kKeyBits) - 1;
+constexpr int kKeyOffset = 1 << (kKeyBits - 1);
+
+// Approximate heap cost of one hash-table slot (key, pointer, robin-hood bookkeeping) at the
+// table's typical load, used for memory accounting.
+constexpr std::size_t kTableSlotBytes = 24;
+
+enum Which { kAnyKnown = 0, kOnlyOccupied = 1, kOnlyFree = 2 };
+
+}  // namespace
+
+void VoxelMapConfig::validate() const {
+  if (!(resolution > 0.0) || !std::isfinite(resolution)) {
+    throw std::invalid_argument("resolution must be a positive number of metres, got " +
+                                std::to_string(resolution));
+  }
+  model.validate();
+}
+
+std::size_t VoxelMap::BlockHash::operator()(std::uint64_t key) const {
+  // splitmix64 finaliser: packed keys differ mostly in high bits, the table masks low bits.
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ULL;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebULL;
+  key ^= key >> 31;
+  return static_cast<std::size_t>(key);
+}
+
+VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
+  config_.validate();
+  min_log_odds_ = config_.model.minLogOdds();
+  max_log_odds_ = config_.model.maxLogOdds();
+  threshold_log_odds_ = config_.model.thresholdLogOdds();
+}
+
+VoxelIndex VoxelMap::indexOf(const Eigen::Vector3d& point) const {
+  return (point / config_.resolution).array().floor().cast<int>();
+}
+
+Eigen::Vector3d VoxelMap::centerOf(const VoxelIndex& index) const {
+  return (index.cast<double>().array() + 0.5) * config_.resolution;
+}
+
+bool VoxelMap::isInRange(const Eigen::Vector3d& point) const {
+  const double limit = kMaxCoordinateVoxels * config_.resolution;
+  return point.allFinite() && (point.array().abs() < limit).all();
+}
+
+BlockIndex VoxelMap::blockOf(const VoxelIndex& index) {
+  // Arithmetic shift floors negative indices too.
+  return {index.x() >> VoxelBlock::kSideLog2, index.y() >> VoxelBlock::kSideLog2,
+          index.z() >> VoxelBlock::kSideLog2};
+}
+
+int VoxelMap::linearIndexInBlock(const VoxelIndex& index) {
+  constexpr int mask = VoxelBlock::kSide - 1;
+  return VoxelBlock::linearIndex(index.x() & mask, index.y() & mask, index.z() & mask);
+}
+
+VoxelIndex VoxelMap::voxelIndex(const BlockIndex& block, int linear) {
+  return block * VoxelBlock::kSide + VoxelBlock::localIndex(linear);
+}
+
+std::uint64_t VoxelMap::packKey(const BlockIndex& block) {
+  auto field = [](int v) { return static_cast<std::uint64_t>(v + kKeyOffset) & kKeyMask; };
+  return field(block.x()) | (field(block.y()) << kKeyBits) | (field(block.z()) << (2 * kKeyBits));
+}
+
+BlockIndex VoxelMap::unpackKey(std::uint64_t key) {
+  auto field = [](std::uint64_t bits) { return static_cast<int>(bits & kKeyMask) - kKeyOffset; };
+  return {field(key), field(key >> kKeyBits), field(key >> (2 * kKeyBits))};
+}
+
+const VoxelBlock* VoxelMap::findBlock(const BlockIndex& block) const {
+  auto it = blocks_.find(packKey(block));
+  return it == blocks_.end() ? nullptr : it->second.get();
+}
+
+VoxelBlock& VoxelMap::blockForWrite(const BlockIndex& block) {
+  const std::uint64_t key = packKey(block);
+  auto it = blocks_.find(key);
+  if (it == blocks_.end()) it = blocks_.emplace(key, std::make_unique<VoxelBlock>()).first;
+  VoxelBlock& result = *it.value();
+  if (result.version != version_) {
+    result.version = version_;
+    markChanged(key);
+  }
+  return result;
+}
+
+void VoxelMap::markChanged(std::uint64_t key) { change_log_.push_back({version_, key, false}); }
+
+void VoxelMap::markRemoved(std::uint64_t key) { change_log_.push_back({version_, key, true}); }
+
+void VoxelMap::finishWrite() {
+  enforceMemoryBound();
+  while (change_log_.size() > kMaxChangeLog) {
+    change_log_start_ = change_log_.front().version + 1;
+    change_log_.pop_front();
+  }
+  ++version_;
+}
+
+std::optional<float> VoxelMap::logOdds(const VoxelIndex& index) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  const VoxelBlock* block = findBlock(blockOf(index));
+  if (block == nullptr) return std::nullopt;
+  const float value = block->log_odds[linearIndexInBlock(index)];
+  if (!VoxelBlock::isKnown(value)) return std::nullopt;
+  return value;
+}
+
+Occupancy VoxelMap::occupancy(const VoxelIndex& index) const {
+  const std::optional<float> value = logOdds(index);
+  return value ? classify(*value) : Occupancy::kUnknown;
+}
+
+void VoxelMap::updateVoxel(const VoxelIndex& index, float delta) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  blockForWrite(blockOf(index))
+      .update(linearIndexInBlock(index), delta, min_log_odds_, max_log_odds_);
+  finishWrite();
+}
+
+void VoxelMap::applyUpdates(const std::vector<VoxelUpdate>& updates) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  BlockIndex last_block(0, 0, 0);
+  VoxelBlock* block = nullptr;
+  for (const VoxelUpdate& update : updates) {
+    const BlockIndex block_index = blockOf(update.index);
+    if (block == nullptr || block_index != last_block) {
+      block = &blockForWrite(block_index);
+      last_block = block_index;
+    }
+    block->update(linearIndexInBlock(update.index), update.delta, min_log_odds_, max_log_odds_);
+  }
+  finishWrite();
+}
+
+void VoxelMap::setLogOdds(const VoxelIndex& index, float log_odds) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  blockForWrite(blockOf(index)).set(linearIndexInBlock(index), log_odds);
+  finishWrite();
+}
+
+void VoxelMap::updateBlocks(const std::vector<BlockIndex>& blocks,
+                            const std::function<void(const BlockIndex&, VoxelBlock&)>& fn) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  // Allocation changes the table, so it happens first and serially; the callbacks then only
+  // touch their own block.
+  std::vector<VoxelBlock*> targets;
+  targets.reserve(blocks.size());
+  for (const BlockIndex& block : blocks) targets.push_back(&blockForWrite(block));
+  const int count = static_cast<int>(blocks.size());
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int i = 0; i < count; ++i) fn(blocks[i], *targets[i]);
+  finishWrite();
+}
+
+std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  const VoxelIndex lo = indexOf(min);
+  const VoxelIndex hi = indexOf(max);
+  const BlockIndex block_lo = blockOf(lo);
+  const BlockIndex block_hi = blockOf(hi);
+  std::size_t changed = 0;
+  for (auto& [key, block_ptr] : blocks_) {
+    const BlockIndex block = unpackKey(key);
+    if ((block.array() < block_lo.array()).any() || (block.array() > block_hi.array()).any()) {
+      continue;
+    }
+    bool touched = false;
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      if (!VoxelBlock::isKnown(block_ptr->log_odds[linear])) continue;
+      const Eigen::Vector3d center = centerOf(voxelIndex(block, linear));
+      if ((center.array() < min.array()).any() || (center.array() > max.array()).any()) continue;
+      block_ptr->log_odds[linear] = min_log_odds_;
+      touched = true;
+      ++changed;
+    }
+    if (touched && block_ptr->version != version_) {
+      block_ptr->version = version_;
+      markChanged(key);
+    }
+  }
+  finishWrite();
+  return changed;
+}
+
+void VoxelMap::reset() {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  blocks_.clear();
+  change_log_.clear();
+  // Consumers holding older versions must rebuild from scratch.
+  change_log_start_ = version_ + 1;
+  ++version_;
+}
+
+void VoxelMap::setFocus(const Eigen::Vector3d& sensor_origin) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  focus_ = sensor_origin;
+}
+
+void VoxelMap::enforceMemoryBound() {
+  // The bound covers the voxel storage; the change log has its own fixed cap (kMaxChangeLog).
+  if (config_.max_memory_bytes == 0 || storageBytesLocked() <= config_.max_memory_bytes) return;
+  const Eigen::Vector3d focus_in_blocks = focus_ / (config_.resolution * VoxelBlock::kSide);
+  std::vector<std::pair<double, std::uint64_t>> by_distance;
+  by_distance.reserve(blocks_.size());
+  for (const auto& entry : blocks_) {
+    const Eigen::Vector3d center = unpackKey(entry.first).cast<double>().array() + 0.5;
+    by_distance.emplace_back((center - focus_in_blocks).squaredNorm(), entry.first);
+  }
+  std::sort(by_distance.begin(), by_distance.end(),
+            [](const auto& a, const auto& b) { return a.first > b.first; });
+  const std::size_t target = config_.max_memory_bytes / 10 * 9;
+  for (const auto& [distance, key] : by_distance) {
+    if (storageBytesLocked() <= target) break;
+    blocks_.erase(key);
+    markRemoved(key);
+    ++evicted_blocks_;
+  }
+}
+
+void VoxelMap::forEachVoxelIf(const VoxelFn& fn, int which) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  for (const auto& [key, block] : blocks_) {
+    const BlockIndex block_index = unpackKey(key);
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      const float value = block->log_odds[linear];
+      if (!VoxelBlock::isKnown(value)) continue;
+      const bool occupied = value > threshold_log_odds_;
+      if ((which == kOnlyOccupied && !occupied) || (which == kOnlyFree && occupied)) continue;
+      fn(voxelIndex(block_index, linear), value);
+    }
+  }
+}
+
+void VoxelMap::forEachKnownVoxel(const VoxelFn& fn) const { forEachVoxelIf(fn, kAnyKnown); }
+void VoxelMap::forEachOccupiedVoxel(const VoxelFn& fn) const { forEachVoxelIf(fn, kOnlyOccupied); }
+void VoxelMap::forEachFreeVoxel(const VoxelFn& fn) const { forEachVoxelIf(fn, kOnlyFree); }
+
+void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+                                      const VoxelFn& fn) const {
+  // Voxels whose centres lie in [min, max]: index range rounded inwards from the box.
+  const VoxelIndex lo = (min / config_.resolution).array().ceil().cast<int>() - 1;
+  const VoxelIndex hi = indexOf(max);
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  const BlockIndex block_lo = blockOf(lo);
+  const BlockIndex block_hi = blockOf(hi);
+  auto visit_block = [&](const BlockIndex& block_index, const VoxelBlock& block) {
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      const float value = block.log_odds[linear];
+      if (!VoxelBlock::isKnown(value)) continue;
+      const VoxelIndex index = voxelIndex(block_index, linear);
+      const Eigen::Vector3d center = centerOf(index);
+      if ((center.array() < min.array()).any() || (center.array() > max.array()).any()) continue;
+      fn(index, value);
+    }
+  };
+  const Eigen::Array3i extent = (block_hi - block_lo).array() + 1;
+  const double box_blocks = extent.cast<double>().prod();
+  if (box_blocks <= static_cast<double>(blocks_.size())) {
+    // A small box: look its blocks up.
+    for (int z = block_lo.z(); z <= block_hi.z(); ++z)
+      for (int y = block_lo.y(); y <= block_hi.y(); ++y)
+        for (int x = block_lo.x(); x <= block_hi.x(); ++x) {
+          const VoxelBlock* block = findBlock({x, y, z});
+          if (block != nullptr) visit_block({x, y, z}, *block);
+        }
+    return;
+  }
+  // A box larger than the map: walk the map's blocks instead.
+  for (const auto& [key, block] : blocks_) {
+    const BlockIndex block_index = unpackKey(key);
+    if ((block_index.array() < block_lo.array()).any() ||
+        (block_index.array() > block_hi.array()).any()) {
+      continue;
+    }
+    visit_block(block_index, *block);
+  }
+}
+
+VoxelCounts VoxelMap::countInBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) const {
+  VoxelCounts counts;
+  forEachKnownVoxelInBox(min, max, [&](const VoxelIndex&, float value) {
+    if (value > threshold_log_odds_) {
+      ++counts.occupied;
+    } else {
+      ++counts.free;
+    }
+  });
+  // Voxels whose centres are inside the box, per axis: indices i with (i + 0.5) r in range.
+  Eigen::Vector3d per_axis;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double first = std::ceil(min[axis] / config_.resolution - 0.5);
+    const double last = std::floor(max[axis] / config_.resolution - 0.5);
+    per_axis[axis] = std::max(0.0, last - first + 1.0);
+  }
+  const double total = per_axis.prod();
+  counts.unknown = static_cast<std::size_t>(total) - counts.occupied - counts.free;
+  return counts;
+}
+
+void VoxelMap::forEachBlock(
+    const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  for (const auto& [key, block] : blocks_) fn(unpackKey(key), *block);
+}
+
+bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  const VoxelBlock* found = findBlock(block);
+  if (found == nullptr) return false;
+  *out = *found;
+  return true;
+}
+
+MapChanges VoxelMap::changesSince(std::uint64_t version) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  MapChanges changes;
+  changes.version = version_;
+  if (version < change_log_start_) {
+    changes.full_rebuild = true;
+    return changes;
+  }
+  // The log is in version order: binary search for the first entry at or after `version`.
+  auto first =
+      std::lower_bound(change_log_.begin(), change_log_.end(), version,
+                       [](const ChangeEntry& entry, std::uint64_t v) { return entry.version < v; });
+  for (auto it = first; it != change_log_.end(); ++it) {
+    (it->removed ? changes.removed : changes.changed).push_back(unpackKey(it->key));
+  }
+  return changes;
+}
+
+std::uint64_t VoxelMap::version() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return version_;
+}
+
+std::size_t VoxelMap::blockCount() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return blocks_.size();
+}
+
+std::size_t VoxelMap::knownVoxelCount() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::size_t count = 0;
+  for (const auto& entry : blocks_) count += static_cast<std::size_t>(entry.second->known_count);
+  return count;
+}
+
+std::size_t VoxelMap::storageBytesLocked() const {
+  return blocks_.size() * sizeof(VoxelBlock) + blocks_.bucket_count() * kTableSlotBytes;
+}
+
+std::size_t VoxelMap::memoryBytesLocked() const {
+  return storageBytesLocked() + change_log_.size() * sizeof(ChangeEntry);
+}
+
+std::size_t VoxelMap::memoryBytes() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return memoryBytesLocked();
+}
+
+std::size_t VoxelMap::evictedBlockCount() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return evicted_blocks_;
+}
+
+}  // namespace occupancy_fusion
