@@ -1,0 +1,199 @@
+// Sparse, tile-allocated 2D log-odds grid with an explicit unknown state: the 2D counterpart of
+// VoxelMap, written by the laser integrator and read by the fused 2D view.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <shared_mutex>
+#include <vector>
+
+#include <tsl/robin_map.h>
+
+#include "occupancy_fusion/map/occupancy_model.h"
+
+namespace occupancy_fusion {
+
+using CellIndex = Eigen::Vector2i;  // floor(p / resolution), per axis
+using TileIndex = Eigen::Vector2i;  // floor(cell index / GridTile::kSide), per axis
+
+// A dense square of kSide^2 cells. NaN log-odds marks a cell that was never observed.
+struct GridTile {
+  static constexpr int kSideLog2 = 5;
+  static constexpr int kSide = 1 << kSideLog2;
+  static constexpr int kArea = kSide * kSide;
+  static constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
+
+  GridTile() { log_odds.fill(kUnknown); }
+
+  // x fastest, so a sweep along x walks memory in order.
+  static int linearIndex(int x, int y) { return x + kSide * y; }
+  static Eigen::Vector2i localIndex(int linear) {
+    return {linear & (kSide - 1), linear >> kSideLog2};
+  }
+  static bool isKnown(float value) { return !std::isnan(value); }
+
+  // Adds delta to one cell (an unknown cell starts at the prior, 0) and clamps.
+  void update(int linear, float delta, float min_log_odds, float max_log_odds) {
+    float& value = log_odds[linear];
+    float sum = delta;
+    if (isKnown(value)) {
+      sum += value;
+    } else {
+      ++known_count;
+    }
+    value = sum < min_log_odds ? min_log_odds : (sum > max_log_odds ? max_log_odds : sum);
+  }
+  void set(int linear, float value) {
+    if (isKnown(value) != isKnown(log_odds[linear])) known_count += isKnown(value) ? 1 : -1;
+    log_odds[linear] = value;
+  }
+
+  std::array<float, kArea> log_odds;
+  int known_count = 0;
+  std::uint64_t version = 0;  // layer version of the last write; maintained by GridLayer2D
+};
+
+struct GridLayer2DConfig {
+  double resolution = 0.05;  // m, edge of a cell
+  OccupancyModel model;      // hit/miss/clamping, as the 3D map's
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+struct CellUpdate {
+  CellIndex index;
+  float delta;  // log-odds increment
+};
+
+// Tiles written or removed after a given layer version (same contract as MapChanges).
+struct GridChanges {
+  std::uint64_t version = 0;       // pass this to the next changesSince()
+  bool full_rebuild = false;       // the log no longer reaches back: rebuild from scratch
+  std::vector<TileIndex> changed;  // written since. Tiles are only removed by reset(), which
+                                   // makes every older version a full rebuild.
+};
+
+// Inclusive range of cell indices.
+struct CellBox {
+  CellIndex min;
+  CellIndex max;
+  int width() const { return max.x() - min.x() + 1; }
+  int height() const { return max.y() - min.y() + 1; }
+};
+
+// A dense window of log-odds, NaN = unknown. Row-major, row 0 is the lowest y (the origin's row),
+// x fastest: data[x + width * y] is cell origin_cell + (x, y).
+struct LogOddsRaster {
+  double resolution = 0.0;
+  CellIndex origin_cell = CellIndex::Zero();  // its corner is (origin_cell * resolution)
+  int width = 0;
+  int height = 0;
+  std::vector<float> data;
+
+  float at(int x, int y) const { return data[static_cast<std::size_t>(x + width * y)]; }
+};
+
+// Thread safety: as VoxelMap. Every public member function may be called from any thread; reads
+// take a shared lock and writes an exclusive one held for the whole call, so one call (a scan's
+// addRaster) is atomic for readers. Callbacks of forEach* run under the shared lock and must not
+// call the layer's write functions.
+class GridLayer2D {
+ public:
+  explicit GridLayer2D(const GridLayer2DConfig& config);  // validates config
+
+  const GridLayer2DConfig& config() const { return config_; }
+  double resolution() const { return config_.resolution; }
+  const OccupancyModel& model() const { return config_.model; }
+  float minLogOdds() const { return min_log_odds_; }
+  float maxLogOdds() const { return max_log_odds_; }
+  Occupancy classify(float log_odds) const {
+    return log_odds > threshold_log_odds_ ? Occupancy::kOccupied : Occupancy::kFree;
+  }
+
+  // Coordinates. Indices are valid for |coordinate| < kMaxCoordinateCells * resolution.
+  static constexpr int kMaxCoordinateCells = 1 << 30;
+  CellIndex indexOf(const Eigen::Vector2d& point) const;
+  Eigen::Vector2d centerOf(const CellIndex& index) const;
+  bool isInRange(const Eigen::Vector2d& point) const;  // finite and representable
+  static TileIndex tileOf(const CellIndex& index);
+  static int linearIndexInTile(const CellIndex& index);
+  static CellIndex cellIndex(const TileIndex& tile, int linear);
+
+  // Point queries.
+  std::optional<float> logOdds(const CellIndex& index) const;  // nullopt: unknown
+  Occupancy occupancy(const CellIndex& index) const;
+  Occupancy occupancyAt(const Eigen::Vector2d& point) const { return occupancy(indexOf(point)); }
+
+  // Writes. Every increment is clamped to the model's [min, max].
+  void updateCell(const CellIndex& index, float delta);
+  void applyUpdates(const std::vector<CellUpdate>& updates);
+  // Adds a dense window of increments, row-major from origin_cell (x fastest, row 0 = lowest y),
+  // width * height values. A NaN increment means "no information": the cell is left as it is.
+  void addRaster(const CellIndex& origin_cell, int width, int height, const float* log_odds_delta);
+  void setLogOdds(const CellIndex& index, float log_odds);  // unclamped, for import
+  // As VoxelMap::clearBox: every known cell whose centre lies in [min, max] becomes free at the
+  // lower clamping bound. Returns the number of cells changed.
+  std::size_t clearBox(const Eigen::Vector2d& min, const Eigen::Vector2d& max);
+  void reset();
+
+  // Iteration (under the shared lock). fn(cell index, log-odds).
+  using CellFn = std::function<void(const CellIndex&, float)>;
+  void forEachKnownCell(const CellFn& fn) const;
+  void forEachTile(const std::function<void(const TileIndex&, const GridTile&)>& fn) const;
+  bool copyTile(const TileIndex& tile, GridTile* out) const;  // false if not allocated
+  // Dense copy of a window (layout of LogOddsRaster::data), NaN where unknown.
+  std::vector<float> window(const CellIndex& origin_cell, int width, int height) const;
+  std::optional<CellBox> knownBounds() const;  // nullopt when nothing is known
+  LogOddsRaster toLogOddsRaster() const;       // over knownBounds(); empty when nothing is known
+
+  // Change log for incremental consumers. Start with version 0 (a full rebuild).
+  GridChanges changesSince(std::uint64_t version) const;
+  std::uint64_t version() const;
+
+  // Accounting.
+  std::size_t tileCount() const;
+  std::size_t knownCellCount() const;
+  std::size_t memoryBytes() const;  // tiles, hash table and change log
+
+ private:
+  struct TileHash {
+    std::size_t operator()(std::uint64_t key) const;
+  };
+  using TileTable = tsl::robin_map<std::uint64_t, std::unique_ptr<GridTile>, TileHash>;
+
+  static std::uint64_t packKey(const TileIndex& tile);
+  static TileIndex unpackKey(std::uint64_t key);
+  GridTile& tileForWrite(const TileIndex& tile);  // allocates, logs; caller holds unique lock
+  const GridTile* findTile(const TileIndex& tile) const;
+  void markWritten(std::uint64_t key, GridTile* tile);
+  void finishWrite();  // trims the change log, bumps the version
+  std::optional<CellBox> knownBoundsLocked() const;
+  std::vector<float> windowLocked(const CellIndex& origin_cell, int width, int height) const;
+
+  GridLayer2DConfig config_;
+  float min_log_odds_;
+  float max_log_odds_;
+  float threshold_log_odds_;
+
+  mutable std::shared_mutex mutex_;
+  TileTable tiles_;
+  std::uint64_t version_ = 1;
+  struct ChangeEntry {
+    std::uint64_t version;
+    std::uint64_t key;
+    bool removed;
+  };
+  std::deque<ChangeEntry> change_log_;  // in version order
+  std::uint64_t change_log_start_ = 1;  // versions before this are no longer in the log
+  static constexpr std::size_t kMaxChangeLog = 1 << 18;
+};
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,345 @@
+#include "occupancy_fusion/map/grid_layer_2d.h"
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+namespace occupancy_fusion {
+namespace {
+
+// Approximate heap cost of one hash-table slot (key, pointer, robin-hood bookkeeping).
+constexpr std::size_t kTableSlotBytes = 24;
+
+}  // namespace
+
+void GridLayer2DConfig::validate() const {
+  if (!(resolution > 0.0) || !std::isfinite(resolution)) {
+    throw std::invalid_argument("resolution must be a positive number of metres, got " +
+                                std::to_string(resolution));
+  }
+  model.validate();
+}
+
+std::size_t GridLayer2D::TileHash::operator()(std::uint64_t key) const {
+  // splitmix64 finaliser: the two packed halves must both reach the low bits the table masks.
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ULL;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebULL;
+  key ^= key >> 31;
+  return static_cast<std::size_t>(key);
+}
+
+GridLayer2D::GridLayer2D(const GridLayer2DConfig& config) : config_(config) {
+  config_.validate();
+  min_log_odds_ = config_.model.minLogOdds();
+  max_log_odds_ = config_.model.maxLogOdds();
+  threshold_log_odds_ = config_.model.thresholdLogOdds();
+}
+
+CellIndex GridLayer2D::indexOf(const Eigen::Vector2d& point) const {
+  return (point / config_.resolution).array().floor().cast<int>();
+}
+
+Eigen::Vector2d GridLayer2D::centerOf(const CellIndex& index) const {
+  return (index.cast<double>().array() + 0.5) * config_.resolution;
+}
+
+bool GridLayer2D::isInRange(const Eigen::Vector2d& point) const {
+  const double limit = kMaxCoordinateCells * config_.resolution;
+  return point.allFinite() && (point.array().abs() < limit).all();
+}
+
+TileIndex GridLayer2D::tileOf(const CellIndex& index) {
+  // Arithmetic shift floors negative indices too.
+  return {index.x() >> GridTile::kSideLog2, index.y() >> GridTile::kSideLog2};
+}
+
+int GridLayer2D::linearIndexInTile(const CellIndex& index) {
+  return GridTile::linearIndex(index.x() & (GridTile::kSide - 1),
+                               index.y() & (GridTile::kSide - 1));
+}
+
+CellIndex GridLayer2D::cellIndex(const TileIndex& tile, int linear) {
+  return tile * GridTile::kSide + GridTile::localIndex(linear);
+}
+
+std::uint64_t GridLayer2D::packKey(const TileIndex& tile) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(tile.x())) << 32) |
+         static_cast<std::uint32_t>(tile.y());
+}
+
+TileIndex GridLayer2D::unpackKey(std::uint64_t key) {
+  return {static_cast<std::int32_t>(static_cast<std::uint32_t>(key >> 32)),
+          static_cast<std::int32_t>(static_cast<std::uint32_t>(key & 0xffffffffULL))};
+}
+
+const GridTile* GridLayer2D::findTile(const TileIndex& tile) const {
+  const auto it = tiles_.find(packKey(tile));
+  return it == tiles_.end() ? nullptr : it->second.get();
+}
+
+void GridLayer2D::markWritten(std::uint64_t key, GridTile* tile) {
+  // One log entry per tile and write call: the tile's version says whether it has one.
+  if (tile->version == version_) return;
+  tile->version = version_;
+  change_log_.push_back({version_, key, false});
+}
+
+GridTile& GridLayer2D::tileForWrite(const TileIndex& tile) {
+  const std::uint64_t key = packKey(tile);
+  auto it = tiles_.find(key);
+  if (it == tiles_.end()) it = tiles_.emplace(key, std::make_unique<GridTile>()).first;
+  GridTile* found = it->second.get();
+  markWritten(key, found);
+  return *found;
+}
+
+void GridLayer2D::finishWrite() {
+  while (change_log_.size() > kMaxChangeLog) {
+    change_log_start_ = change_log_.front().version + 1;
+    change_log_.pop_front();
+  }
+  ++version_;
+}
+
+std::optional<float> GridLayer2D::logOdds(const CellIndex& index) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  const GridTile* tile = findTile(tileOf(index));
+  if (tile == nullptr) return std::nullopt;
+  const float value = tile->log_odds[linearIndexInTile(index)];
+  if (!GridTile::isKnown(value)) return std::nullopt;
+  return value;
+}
+
+Occupancy GridLayer2D::occupancy(const CellIndex& index) const {
+  const std::optional<float> value = logOdds(index);
+  return value ? classify(*value) : Occupancy::kUnknown;
+}
+
+void GridLayer2D::updateCell(const CellIndex& index, float delta) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  tileForWrite(tileOf(index)).update(linearIndexInTile(index), delta, min_log_odds_, max_log_odds_);
+  finishWrite();
+}
+
+void GridLayer2D::applyUpdates(const std::vector<CellUpdate>& updates) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  TileIndex last_tile(0, 0);
+  GridTile* tile = nullptr;
+  for (const CellUpdate& update : updates) {
+    const TileIndex tile_index = tileOf(update.index);
+    if (tile == nullptr || tile_index != last_tile) {
+      tile = &tileForWrite(tile_index);
+      last_tile = tile_index;
+    }
+    tile->update(linearIndexInTile(update.index), update.delta, min_log_odds_, max_log_odds_);
+  }
+  finishWrite();
+}
+
+void GridLayer2D::addRaster(const CellIndex& origin_cell, int width, int height,
+                            const float* log_odds_delta) {
+  if (width < 0 || height < 0) {
+    throw std::invalid_argument("GridLayer2D::addRaster: negative window size");
+  }
+  if (width == 0 || height == 0) return;
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  // Walk the window tile by tile, so each tile is looked up once.
+  const CellIndex end = origin_cell + CellIndex(width, height);
+  const TileIndex first_tile = tileOf(origin_cell);
+  const TileIndex last_tile = tileOf(end - CellIndex::Ones());
+  for (int ty = first_tile.y(); ty <= last_tile.y(); ++ty) {
+    for (int tx = first_tile.x(); tx <= last_tile.x(); ++tx) {
+      const CellIndex tile_min = TileIndex(tx, ty) * GridTile::kSide;
+      const CellIndex lo = tile_min.cwiseMax(origin_cell);
+      const CellIndex hi = (tile_min + CellIndex::Constant(GridTile::kSide)).cwiseMin(end);
+      GridTile* tile = nullptr;
+      for (int y = lo.y(); y < hi.y(); ++y) {
+        const float* row = log_odds_delta + static_cast<std::size_t>(y - origin_cell.y()) * width;
+        for (int x = lo.x(); x < hi.x(); ++x) {
+          const float delta = row[x - origin_cell.x()];
+          if (std::isnan(delta)) continue;
+          if (tile == nullptr) tile = &tileForWrite({tx, ty});
+          tile->update(linearIndexInTile({x, y}), delta, min_log_odds_, max_log_odds_);
+        }
+      }
+    }
+  }
+  finishWrite();
+}
+
+void GridLayer2D::setLogOdds(const CellIndex& index, float log_odds) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  tileForWrite(tileOf(index)).set(linearIndexInTile(index), log_odds);
+  finishWrite();
+}
+
+std::size_t GridLayer2D::clearBox(const Eigen::Vector2d& min, const Eigen::Vector2d& max) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  const TileIndex tile_lo = tileOf(indexOf(min));
+  const TileIndex tile_hi = tileOf(indexOf(max));
+  std::size_t changed = 0;
+  for (auto it = tiles_.begin(); it != tiles_.end(); ++it) {
+    const TileIndex tile_index = unpackKey(it->first);
+    if ((tile_index.array() < tile_lo.array()).any() ||
+        (tile_index.array() > tile_hi.array()).any()) {
+      continue;
+    }
+    GridTile* tile = it.value().get();
+    for (int linear = 0; linear < GridTile::kArea; ++linear) {
+      if (!GridTile::isKnown(tile->log_odds[linear])) continue;
+      const Eigen::Vector2d center = centerOf(cellIndex(tile_index, linear));
+      if ((center.array() < min.array()).any() || (center.array() > max.array()).any()) continue;
+      tile->log_odds[linear] = min_log_odds_;
+      markWritten(it->first, tile);
+      ++changed;
+    }
+  }
+  finishWrite();
+  return changed;
+}
+
+void GridLayer2D::reset() {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  tiles_.clear();
+  change_log_.clear();
+  // Consumers holding older versions must rebuild from scratch.
+  change_log_start_ = version_ + 1;
+  ++version_;
+}
+
+void GridLayer2D::forEachKnownCell(const CellFn& fn) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  for (const auto& [key, tile] : tiles_) {
+    const TileIndex tile_index = unpackKey(key);
+    for (int linear = 0; linear < GridTile::kArea; ++linear) {
+      const float value = tile->log_odds[linear];
+      if (GridTile::isKnown(value)) fn(cellIndex(tile_index, linear), value);
+    }
+  }
+}
+
+void GridLayer2D::forEachTile(
+    const std::function<void(const TileIndex&, const GridTile&)>& fn) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  for (const auto& [key, tile] : tiles_) fn(unpackKey(key), *tile);
+}
+
+bool GridLayer2D::copyTile(const TileIndex& tile, GridTile* out) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  const GridTile* found = findTile(tile);
+  if (found == nullptr) return false;
+  *out = *found;
+  return true;
+}
+
+std::vector<float> GridLayer2D::windowLocked(const CellIndex& origin_cell, int width,
+                                             int height) const {
+  std::vector<float> out(static_cast<std::size_t>(std::max(width, 0)) * std::max(height, 0),
+                         GridTile::kUnknown);
+  if (out.empty()) return out;
+  const CellIndex end = origin_cell + CellIndex(width, height);
+  const TileIndex first_tile = tileOf(origin_cell);
+  const TileIndex last_tile = tileOf(end - CellIndex::Ones());
+  for (int ty = first_tile.y(); ty <= last_tile.y(); ++ty) {
+    for (int tx = first_tile.x(); tx <= last_tile.x(); ++tx) {
+      const GridTile* tile = findTile({tx, ty});
+      if (tile == nullptr) continue;
+      const CellIndex tile_min = TileIndex(tx, ty) * GridTile::kSide;
+      const CellIndex lo = tile_min.cwiseMax(origin_cell);
+      const CellIndex hi = (tile_min + CellIndex::Constant(GridTile::kSide)).cwiseMin(end);
+      for (int y = lo.y(); y < hi.y(); ++y) {
+        for (int x = lo.x(); x < hi.x(); ++x) {
+          out[static_cast<std::size_t>(y - origin_cell.y()) * width + (x - origin_cell.x())] =
+              tile->log_odds[linearIndexInTile({x, y})];
+        }
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<float> GridLayer2D::window(const CellIndex& origin_cell, int width, int height) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return windowLocked(origin_cell, width, height);
+}
+
+std::optional<CellBox> GridLayer2D::knownBoundsLocked() const {
+  std::optional<CellBox> box;
+  for (const auto& [key, tile] : tiles_) {
+    if (tile->known_count == 0) continue;
+    const TileIndex tile_index = unpackKey(key);
+    for (int linear = 0; linear < GridTile::kArea; ++linear) {
+      if (!GridTile::isKnown(tile->log_odds[linear])) continue;
+      const CellIndex cell = cellIndex(tile_index, linear);
+      if (!box) {
+        box = CellBox{cell, cell};
+      } else {
+        box->min = box->min.cwiseMin(cell);
+        box->max = box->max.cwiseMax(cell);
+      }
+    }
+  }
+  return box;
+}
+
+std::optional<CellBox> GridLayer2D::knownBounds() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return knownBoundsLocked();
+}
+
+LogOddsRaster GridLayer2D::toLogOddsRaster() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  LogOddsRaster raster;
+  raster.resolution = config_.resolution;
+  const std::optional<CellBox> box = knownBoundsLocked();
+  if (!box) return raster;
+  raster.origin_cell = box->min;
+  raster.width = box->width();
+  raster.height = box->height();
+  raster.data = windowLocked(box->min, raster.width, raster.height);
+  return raster;
+}
+
+GridChanges GridLayer2D::changesSince(std::uint64_t version) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  GridChanges changes;
+  changes.version = version_;
+  if (version < change_log_start_) {
+    changes.full_rebuild = true;
+    return changes;
+  }
+  auto first =
+      std::lower_bound(change_log_.begin(), change_log_.end(), version,
+                       [](const ChangeEntry& entry, std::uint64_t v) { return entry.version < v; });
+  for (auto it = first; it != change_log_.end(); ++it)
+    changes.changed.push_back(unpackKey(it->key));
+  return changes;
+}
+
+std::uint64_t GridLayer2D::version() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return version_;
+}
+
+std::size_t GridLayer2D::tileCount() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return tiles_.size();
+}
+
+std::size_t GridLayer2D::knownCellCount() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::size_t count = 0;
+  for (const auto& entry : tiles_) count += static_cast<std::size_t>(entry.second->known_count);
+  return count;
+}
+
+std::size_t GridLayer2D::memoryBytes() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return tiles_.size() * sizeof(GridTile) + tiles_.bucket_count() * kTableSlotBytes +
+         change_log_.size() * sizeof(ChangeEntry);
+}
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,245 @@
+#include "occupancy_fusion/map/map_files.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "occupancy_fusion/map/octomap_conversion.h"
+
+namespace occupancy_fusion {
+namespace {
+
+// map_server's pixel values (map_saver): p = (255 - pixel) / 255 with negate 0, so 0 reads as
+// occupied (p = 1 > 0.65), 254 as free (p = 0.004 < 0.196) and 205 as unknown (p = 0.196...).
+constexpr std::uint8_t kPgmOccupied = 0;
+constexpr std::uint8_t kPgmFree = 254;
+constexpr std::uint8_t kPgmUnknown = 205;
+constexpr double kOccupiedThreshold = 0.65;
+constexpr double kFreeThreshold = 0.196;
+
+constexpr std::uint8_t kPngOccupied = 0;
+constexpr std::uint8_t kPngFree = 255;
+constexpr std::uint8_t kPngUnknown = 128;
+
+std::string fileName(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+std::string extensionOf(const std::string& path) {
+  const std::string name = fileName(path);
+  const std::size_t dot = name.find_last_of('.');
+  return dot == std::string::npos ? std::string() : name.substr(dot);
+}
+
+void requireNonEmpty(const OccupancyRaster& raster, const char* what) {
+  if (raster.empty()) throw std::invalid_argument(std::string(what) + ": the raster is empty");
+  if (raster.data.size() != static_cast<std::size_t>(raster.width) * raster.height) {
+    throw std::invalid_argument(std::string(what) + ": data size does not match width x height");
+  }
+}
+
+void writeLittleEndianFloat(std::ostream& out, float value) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &value, sizeof(bits));
+  const char bytes[4] = {static_cast<char>(bits & 0xff), static_cast<char>((bits >> 8) & 0xff),
+                         static_cast<char>((bits >> 16) & 0xff),
+                         static_cast<char>((bits >> 24) & 0xff)};
+  out.write(bytes, sizeof(bytes));
+}
+
+std::uint8_t pgmValue(std::int8_t cell) {
+  if (cell < 0) return kPgmUnknown;
+  if (cell >= kOccupiedThreshold * 100.0) return kPgmOccupied;
+  if (cell <= kFreeThreshold * 100.0) return kPgmFree;
+  return kPgmUnknown;
+}
+
+std::uint8_t pngValue(std::int8_t cell) {
+  if (cell < 0) return kPngUnknown;
+  return cell >= kOccupiedThreshold * 100.0 ? kPngOccupied : kPngFree;
+}
+
+// A number in its shortest exact-enough text form (no trailing zeros).
+std::string numberText(double value) {
+  std::ostringstream text;
+  text << std::setprecision(15) << value;
+  return text.str();
+}
+
+std::size_t writeTree(const VoxelMap& map, const std::string& path, bool binary) {
+  std::size_t skipped = 0;
+  std::unique_ptr<octomap::OcTree> tree = toOcTree(map, &skipped);
+  writeFileAtomically(path, [&](std::ostream& out) {
+    // writeBinary converts the tree to maximum likelihood first, as octomap_server's .bt files.
+    const bool ok = binary ? tree->writeBinary(out) : tree->write(out);
+    if (!ok) throw std::runtime_error("liboctomap failed to serialise the tree");
+  });
+  return skipped;
+}
+
+}  // namespace
+
+void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  static std::atomic<unsigned> counter{0};
+  const std::string temporary =
+      path + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+  try {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(std::strerror(errno));
+    write(out);
+    out.flush();
+    if (!out) throw std::runtime_error("write failed");
+    out.close();
+    if (out.fail()) throw std::runtime_error("close failed");
+    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+      throw std::runtime_error(std::string("rename failed: ") + std::strerror(errno));
+    }
+  } catch (const std::exception& error) {
+    std::remove(temporary.c_str());
+    throw std::runtime_error("cannot write " + path + ": " + error.what());
+  }
+}
+
+std::size_t writeBt(const VoxelMap& map, const std::string& path) {
+  return writeTree(map, path, /*binary=*/true);
+}
+
+std::size_t writeOt(const VoxelMap& map, const std::string& path) {
+  return writeTree(map, path, /*binary=*/false);
+}
+
+std::unique_ptr<VoxelMap> readOctomapFile(const std::string& path, const VoxelMapConfig& base) {
+  std::unique_ptr<octomap::OcTree> tree = readOcTreeFile(path, base.model);
+  VoxelMapConfig config = base;
+  config.resolution = tree->getResolution();
+  auto map = std::make_unique<VoxelMap>(config);
+  fromOcTree(*tree, map.get());
+  return map;
+}
+
+void writeMapServerFiles(const OccupancyRaster& raster, const std::string& prefix) {
+  requireNonEmpty(raster, "writeMapServerFiles");
+  const std::string pgm_path = prefix + ".pgm";
+  writeFileAtomically(pgm_path, [&](std::ostream& out) {
+    out << "P5\n# occupancy_fusion map, " << numberText(raster.resolution) << " m/pixel\n"
+        << raster.width << ' ' << raster.height << "\n255\n";
+    std::vector<char> row(static_cast<std::size_t>(raster.width));
+    // The image's first row is the map's top (highest y).
+    for (int y = raster.height - 1; y >= 0; --y) {
+      for (int x = 0; x < raster.width; ++x) row[x] = static_cast<char>(pgmValue(raster.at(x, y)));
+      out.write(row.data(), static_cast<std::streamsize>(row.size()));
+    }
+  });
+  writeFileAtomically(prefix + ".yaml", [&](std::ostream& out) {
+    out << "image: " << fileName(pgm_path) << "\n"
+        << "resolution: " << numberText(raster.resolution) << "\n"
+        << "origin: [" << numberText(raster.origin_x) << ", " << numberText(raster.origin_y)
+        << ", 0.0]\n"
+        << "negate: 0\n"
+        << "occupied_thresh: " << numberText(kOccupiedThreshold) << "\n"
+        << "free_thresh: " << numberText(kFreeThreshold) << "\n";
+  });
+}
+
+void writeNpy(const LogOddsRaster& raster, const std::string& path) {
+  if (raster.width < 0 || raster.height < 0 ||
+      raster.data.size() != static_cast<std::size_t>(raster.width) * raster.height) {
+    throw std::invalid_argument("writeNpy: data size does not match width x height for " + path);
+  }
+  // Format 1.0: magic, version, uint16 header length, then a Python dict literal padded with
+  // spaces and ended by '\n' so that the data starts at a multiple of 64 bytes.
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
+                       std::to_string(raster.height) + ", " + std::to_string(raster.width) + "), }";
+  constexpr std::size_t kPreamble = 10;  // magic (6) + version (2) + length (2)
+  const std::size_t unpadded = kPreamble + header.size() + 1;
+  header.append((64 - unpadded % 64) % 64, ' ');
+  header.push_back('\n');
+  writeFileAtomically(path, [&](std::ostream& out) {
+    out.write("\x93NUMPY\x01\x00", 8);
+    const char length[2] = {static_cast<char>(header.size() & 0xff),
+                            static_cast<char>((header.size() >> 8) & 0xff)};
+    out.write(length, 2);
+    out << header;
+    for (const float value : raster.data) writeLittleEndianFloat(out, value);
+  });
+}
+
+void writePcd(const VoxelMap& map, const std::string& path, PcdEncoding encoding) {
+  struct Point {
+    Eigen::Vector3f center;
+    float probability;
+  };
+  std::vector<Point> points;
+  map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    points.push_back(
+        {map.centerOf(index).cast<float>(), static_cast<float>(probabilityFromLogOdds(log_odds))});
+  });
+  writeFileAtomically(path, [&](std::ostream& out) {
+    out << "# .PCD v0.7 - Point Cloud Data file format\n"
+        << "VERSION 0.7\n"
+        << "FIELDS x y z probability\n"
+        << "SIZE 4 4 4 4\n"
+        << "TYPE F F F F\n"
+        << "COUNT 1 1 1 1\n"
+        << "WIDTH " << points.size() << "\n"
+        << "HEIGHT 1\n"
+        << "VIEWPOINT 0 0 0 1 0 0 0\n"
+        << "POINTS " << points.size() << "\n"
+        << "DATA " << (encoding == PcdEncoding::kBinary ? "binary" : "ascii") << "\n";
+    if (encoding == PcdEncoding::kBinary) {
+      for (const Point& point : points) {
+        for (int axis = 0; axis < 3; ++axis) writeLittleEndianFloat(out, point.center[axis]);
+        writeLittleEndianFloat(out, point.probability);
+      }
+    } else {
+      out << std::setprecision(9);  // enough digits to read every float back exactly
+      for (const Point& point : points) {
+        out << point.center.x() << ' ' << point.center.y() << ' ' << point.center.z() << ' '
+            << point.probability << '\n';
+      }
+    }
+  });
+}
+
+void writePng(const OccupancyRaster& raster, const std::string& path, int scale) {
+  requireNonEmpty(raster, "writePng");
+  if (scale < 1) throw std::invalid_argument("writePng: scale must be at least 1");
+  cv::Mat image(raster.height * scale, raster.width * scale, CV_8UC1);
+  for (int row = 0; row < image.rows; ++row) {
+    const int y = raster.height - 1 - row / scale;  // y up: the top row is the highest y
+    auto* pixels = image.ptr<std::uint8_t>(row);
+    for (int column = 0; column < image.cols; ++column) {
+      pixels[column] = pngValue(raster.at(column / scale, y));
+    }
+  }
+  std::string extension = extensionOf(path);
+  if (extension.empty()) extension = ".png";
+  std::vector<std::uint8_t> encoded;
+  bool ok = false;
+  try {
+    ok = cv::imencode(extension, image, encoded);
+  } catch (const cv::Exception& error) {
+    throw std::runtime_error("cannot encode " + path + ": " + error.what());
+  }
+  if (!ok) throw std::runtime_error("cannot encode " + path + " as " + extension);
+  writeFileAtomically(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(encoded.data()),
+              static_cast<std::streamsize>(encoded.size()));
+  });
+}
+
+}  // namespace occupancy_fusion
