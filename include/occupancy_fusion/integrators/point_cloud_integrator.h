@@ -1,0 +1,180 @@
+// OctoMap-equivalent point-cloud integration: free space along each ray, a hit at its end point,
+// one update per voxel per cloud (OcTree::insertPointCloud with lazy_eval = false and
+// discretize = false).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <tsl/robin_map.h>
+
+#include "occupancy_fusion/map/voxel_map.h"
+
+namespace occupancy_fusion {
+
+// The voxels one cloud marks free and occupied, kept as two bit masks per 8^3 block: inserting a
+// voxel twice is free, a voxel in both sets counts as occupied (OctoMap's rule: occupied wins),
+// and applying the set to a VoxelMap works block by block.
+class VoxelUpdateSet {
+ public:
+  static constexpr int kWords = VoxelBlock::kVolume / 64;
+  struct BlockMasks {
+    std::array<std::uint64_t, kWords> free{};
+    std::array<std::uint64_t, kWords> occupied{};
+  };
+
+  VoxelUpdateSet() = default;
+  // Copies and moves drop the block cache, which points into the source's table.
+  VoxelUpdateSet(const VoxelUpdateSet& other) : blocks_(other.blocks_) {}
+  VoxelUpdateSet(VoxelUpdateSet&& other) noexcept : blocks_(std::move(other.blocks_)) {
+    other.clear();
+  }
+  VoxelUpdateSet& operator=(const VoxelUpdateSet& other) {
+    blocks_ = other.blocks_;
+    cached_ = nullptr;
+    return *this;
+  }
+  VoxelUpdateSet& operator=(VoxelUpdateSet&& other) noexcept {
+    blocks_ = std::move(other.blocks_);
+    cached_ = nullptr;
+    other.clear();
+    return *this;
+  }
+
+  void markFree(const VoxelIndex& index) { mark(index, false); }
+  void markOccupied(const VoxelIndex& index) { mark(index, true); }
+  // Union with another set (e.g. one computed on another thread).
+  void merge(const VoxelUpdateSet& other);
+  void clear();
+
+  bool isOccupied(const VoxelIndex& index) const;
+  bool isFree(const VoxelIndex& index) const;  // marked free and not occupied
+  std::size_t occupiedCount() const;
+  std::size_t freeCount() const;  // free and not occupied
+  bool empty() const { return blocks_.empty(); }
+
+  std::vector<BlockIndex> blocks() const;
+  // nullptr if nothing in that block is marked.
+  const BlockMasks* find(const BlockIndex& block) const;
+  // fn(const VoxelIndex&) for each occupied / each free-and-not-occupied voxel, in no order.
+  template <typename Fn>
+  void forEachOccupied(Fn&& fn) const {
+    forEachBit(std::forward<Fn>(fn), [](const BlockMasks& m, int w) { return m.occupied[w]; });
+  }
+  template <typename Fn>
+  void forEachFree(Fn&& fn) const {
+    forEachBit(std::forward<Fn>(fn),
+               [](const BlockMasks& m, int w) { return m.free[w] & ~m.occupied[w]; });
+  }
+
+  // 21 bits per axis, enough for VoxelMap::kMaxBlockCoordinate.
+  static std::uint64_t packBlock(const BlockIndex& block) {
+    constexpr std::uint64_t kMask21 = (std::uint64_t{1} << 21) - 1;
+    auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & kMask21; };
+    return field(block.x()) | (field(block.y()) << 21) | (field(block.z()) << 42);
+  }
+  static BlockIndex unpackBlock(std::uint64_t key);
+
+ private:
+  struct KeyHash {
+    std::size_t operator()(std::uint64_t key) const {
+      // Fibonacci hashing mixes the packed x|y|z fields into the low bits the table masks.
+      const std::uint64_t mixed = key * 0x9E3779B97F4A7C15ull;
+      return static_cast<std::size_t>(mixed ^ (mixed >> 29));
+    }
+  };
+  using Table = tsl::robin_map<std::uint64_t, BlockMasks, KeyHash>;
+
+  void mark(const VoxelIndex& index, bool occupied) {
+    // Same block and in-block index as VoxelMap::blockOf / linearIndexInBlock, inlined for the
+    // hot loop (arithmetic shift floors negative indices).
+    constexpr int kShift = VoxelBlock::kSideLog2;
+    constexpr int kMask = VoxelBlock::kSide - 1;
+    const std::uint64_t key =
+        packBlock(BlockIndex(index.x() >> kShift, index.y() >> kShift, index.z() >> kShift));
+    // Rays walk neighbouring voxels, so most marks hit the block of the previous one. The
+    // cached pointer stays valid: the table only moves values when a new key is inserted, and
+    // that happens right here before the pointer is taken.
+    if (cached_ == nullptr || key != cached_key_) {
+      cached_ = &blocks_[key];
+      cached_key_ = key;
+    }
+    const int linear =
+        VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
+    const std::uint64_t bit = std::uint64_t{1} << (linear & 63);
+    (occupied ? cached_->occupied : cached_->free)[linear >> 6] |= bit;
+  }
+
+  template <typename Fn, typename WordFn>
+  void forEachBit(Fn&& fn, WordFn&& word_of) const {
+    for (const auto& [key, masks] : blocks_) {
+      const BlockIndex block = unpackBlock(key);
+      for (int w = 0; w < kWords; ++w) {
+        for (std::uint64_t bits = word_of(masks, w); bits != 0; bits &= bits - 1) {
+          const int linear = 64 * w + __builtin_ctzll(bits);
+          fn(VoxelIndex(block * VoxelBlock::kSide + VoxelBlock::localIndex(linear)));
+        }
+      }
+    }
+  }
+
+  Table blocks_;
+  BlockMasks* cached_ = nullptr;
+  std::uint64_t cached_key_ = 0;
+};
+
+struct PointCloudIntegratorConfig {
+  // m; points farther from the sensor only clear free space up to this distance and add no hit.
+  // Negative: unlimited. octomap_server's sensor_model/max_range.
+  double max_range = -1.0;
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+struct IntegrationStats {
+  std::size_t points = 0;           // points in the cloud
+  std::size_t skipped_points = 0;   // non-finite or outside the map's coordinate range
+  std::size_t rays = 0;             // rays cast (points - skipped_points)
+  std::size_t free_voxels = 0;      // voxels updated as free
+  std::size_t occupied_voxels = 0;  // voxels updated as occupied
+  double seconds = 0.0;             // wall time of the call
+};
+
+// Integrates point clouds exactly as OctoMap's OcTree::insertPointCloud(cloud, origin, max_range,
+// lazy_eval = false, discretize = false): each ray start -> point marks the voxels it crosses
+// free, except the voxel holding the point, which is marked occupied; a point beyond max_range
+// marks free the voxels up to origin + max_range * direction (that end voxel excluded) and no
+// hit. Each voxel then gets one update per cloud: a hit if any ray ended in it, else a miss.
+// Rays are cast on all OpenMP threads.
+class PointCloudIntegrator {
+ public:
+  explicit PointCloudIntegrator(const PointCloudIntegratorConfig& config = {});  // validates
+
+  const PointCloudIntegratorConfig& config() const { return config_; }
+
+  // Casts the rays of one cloud (map frame) into `update` (cleared first), without touching a
+  // map. Fills every field of the stats except seconds and the voxel counts.
+  IntegrationStats computeUpdate(const std::vector<Eigen::Vector3f>& points_in_map,
+                                 const Eigen::Vector3d& sensor_origin_in_map, double resolution,
+                                 VoxelUpdateSet* update) const;
+
+  // computeUpdate, then one write call into the map (hits and misses from the map's model), and
+  // the map's focus moves to the sensor origin. A sensor origin outside the map's range skips the
+  // whole cloud.
+  IntegrationStats integrate(const std::vector<Eigen::Vector3f>& points_in_map,
+                             const Eigen::Vector3d& sensor_origin_in_map, VoxelMap* map) const;
+
+  // Applies an update set: hit_log_odds to occupied voxels, miss_log_odds to the other marked
+  // ones, in one VoxelMap::updateBlocks call.
+  static void apply(const VoxelUpdateSet& update, float hit_log_odds, float miss_log_odds,
+                    VoxelMap* map);
+
+ private:
+  PointCloudIntegratorConfig config_;
+};
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,357 @@
+// The point-cloud integrator against liboctomap's OcTree::insertPointCloud on the same clouds,
+// and its own semantics (max range, skipped points, one update per voxel per cloud).
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+#include <omp.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "occupancy_fusion/integrators/point_cloud_integrator.h"
+
+namespace occupancy_fusion {
+namespace {
+
+using Cloud = std::vector<Eigen::Vector3f>;
+using Key = std::tuple<int, int, int>;
+
+struct Scan {
+  Cloud points;
+  Eigen::Vector3d origin;
+};
+
+// Origins given to both libraries must be equal: OctoMap takes floats.
+Eigen::Vector3d floatExact(double x, double y, double z) {
+  return Eigen::Vector3f(x, y, z).cast<double>();
+}
+
+Cloud randomShell(std::mt19937* rng, const Eigen::Vector3d& origin, double r_min, double r_max,
+                  int count) {
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> radius(r_min, r_max);
+  Cloud cloud;
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector3d direction =
+        Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng)).normalized();
+    cloud.push_back((origin + radius(*rng) * direction).cast<float>());
+  }
+  return cloud;
+}
+
+// A wall x = wall_x, |y| <= 1.5, 0 <= z <= 2, sampled every `spacing` metres with jitter.
+Cloud wall(std::mt19937* rng, double wall_x, double spacing) {
+  std::uniform_real_distribution<double> jitter(-0.3 * spacing, 0.3 * spacing);
+  Cloud cloud;
+  for (double y = -1.5; y <= 1.5; y += spacing) {
+    for (double z = 0.0; z <= 2.0; z += spacing) {
+      cloud.emplace_back(wall_x + jitter(*rng), y + jitter(*rng), z + jitter(*rng));
+    }
+  }
+  return cloud;
+}
+
+// Label and log-odds of one voxel; label -1 unknown, 0 free, 1 occupied.
+struct Cell {
+  int label = -1;
+  float log_odds = 0.0f;
+};
+
+struct Comparison {
+  std::size_t voxels = 0;  // touched by either
+  std::size_t agree = 0;
+  std::size_t occupied = 0;  // occupied in ours, for checks that the scene is not trivial
+  std::vector<std::string> disagreements;
+};
+
+Comparison compare(const VoxelMap& map, const octomap::OcTree& tree) {
+  constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val at depth 16
+  std::map<Key, Cell> ours;
+  std::map<Key, Cell> theirs;
+  map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    ours[{index.x(), index.y(), index.z()}] = {map.classify(log_odds) == Occupancy::kOccupied,
+                                               log_odds};
+  });
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const octomap::OcTreeKey key = it.getKey();
+    // A pruned leaf covers 2^(depth - its depth) voxels per axis, from its key rounded down.
+    const int side = 1 << (depth - static_cast<int>(it.getDepth()));
+    const Cell cell{tree.isNodeOccupied(*it) ? 1 : 0, it->getLogOdds()};
+    const int x0 = (key[0] & ~(side - 1)) - kKeyOffset;
+    const int y0 = (key[1] & ~(side - 1)) - kKeyOffset;
+    const int z0 = (key[2] & ~(side - 1)) - kKeyOffset;
+    for (int x = x0; x < x0 + side; ++x) {
+      for (int y = y0; y < y0 + side; ++y) {
+        for (int z = z0; z < z0 + side; ++z) theirs[{x, y, z}] = cell;
+      }
+    }
+  }
+  Comparison result;
+  std::map<Key, std::pair<Cell, Cell>> all;
+  for (const auto& [key, cell] : ours) all[key].first = cell;
+  for (const auto& [key, cell] : theirs) all[key].second = cell;
+  for (const auto& [key, cells] : all) {
+    const auto& [a, b] = cells;
+    ++result.voxels;
+    if (a.label == 1) ++result.occupied;
+    const bool same =
+        a.label == b.label && (a.label == -1 || std::abs(a.log_odds - b.log_odds) < 1e-4);
+    if (same) {
+      ++result.agree;
+    } else if (result.disagreements.size() < 20) {
+      std::ostringstream line;
+      line << "voxel (" << std::get<0>(key) << ", " << std::get<1>(key) << ", " << std::get<2>(key)
+           << "): ours label " << a.label << " log-odds " << a.log_odds << ", octomap label "
+           << b.label << " log-odds " << b.log_odds;
+      result.disagreements.push_back(line.str());
+    }
+  }
+  return result;
+}
+
+// Integrates the scans in order into both maps and compares them.
+Comparison integrateBoth(const std::vector<Scan>& scans, double resolution, double max_range) {
+  VoxelMapConfig map_config;
+  map_config.resolution = resolution;
+  VoxelMap map(map_config);
+  PointCloudIntegratorConfig config;
+  config.max_range = max_range;
+  const PointCloudIntegrator integrator(config);
+
+  octomap::OcTree tree(resolution);
+  tree.setProbHit(map_config.model.prob_hit);
+  tree.setProbMiss(map_config.model.prob_miss);
+  tree.setClampingThresMin(map_config.model.clamp_min);
+  tree.setClampingThresMax(map_config.model.clamp_max);
+  tree.setOccupancyThres(map_config.model.occupancy_threshold);
+
+  for (const Scan& scan : scans) {
+    integrator.integrate(scan.points, scan.origin, &map);
+    octomap::Pointcloud cloud;
+    for (const Eigen::Vector3f& p : scan.points) cloud.push_back(p.x(), p.y(), p.z());
+    const octomap::point3d origin(scan.origin.x(), scan.origin.y(), scan.origin.z());
+    tree.insertPointCloud(cloud, origin, max_range, false, false);
+  }
+  return compare(map, tree);
+}
+
+// OctoMap's computeRayKeys walks in float coordinates with a normalised float direction, breaks
+// exact ties between axes the other way (strict <), and stops a ray early when its accumulated
+// distance passes the segment length by rounding; so where a ray passes within rounding of a voxel
+// edge or corner, or ends within rounding of a face, the two walks may pick a different voxel.
+void expectAgreement(const Comparison& result, std::size_t min_voxels) {
+  const double fraction = static_cast<double>(result.agree) / result.voxels;
+  std::cout << "  " << result.agree << " of " << result.voxels << " voxels agree ("
+            << 100.0 * fraction << " %), " << result.occupied << " occupied\n";
+  for (const std::string& line : result.disagreements) std::cout << "  differs: " << line << "\n";
+  EXPECT_GE(result.voxels, min_voxels);
+  EXPECT_GE(fraction, 0.999);
+}
+
+TEST(PointCloudIntegrator, AgreesWithOctomapOnRandomPoints) {
+  std::mt19937 rng(1);
+  const Eigen::Vector3d origin = floatExact(0.12, -0.31, 0.05);
+  const std::vector<Scan> scans{{randomShell(&rng, origin, 0.3, 4.0, 3000), origin}};
+  const Comparison result = integrateBoth(scans, 0.1, -1.0);
+  expectAgreement(result, 20000);
+  EXPECT_GT(result.occupied, 2500u);
+}
+
+TEST(PointCloudIntegrator, AgreesWithOctomapOnAPlane) {
+  std::mt19937 rng(2);
+  const Eigen::Vector3d origin = floatExact(-0.4, 0.21, 1.1);
+  const std::vector<Scan> scans{{wall(&rng, 3.0, 0.02), origin}};
+  const Comparison result = integrateBoth(scans, 0.05, -1.0);
+  expectAgreement(result, 50000);
+  EXPECT_GT(result.occupied, 2000u);
+}
+
+TEST(PointCloudIntegrator, AgreesWithOctomapBeyondMaxRange) {
+  std::mt19937 rng(3);
+  const Eigen::Vector3d origin = floatExact(1.3, -2.7, -0.6);
+  const std::vector<Scan> scans{{randomShell(&rng, origin, 0.5, 6.0, 3000), origin}};
+  const Comparison result = integrateBoth(scans, 0.1, 3.0);
+  expectAgreement(result, 20000);
+  EXPECT_GT(result.occupied, 500u);
+}
+
+TEST(PointCloudIntegrator, AgreesWithOctomapOverASequenceOfClouds) {
+  // Overlapping clouds from moving origins, at negative coordinates: free and occupied updates
+  // accumulate on the same voxels and reach both clamping bounds.
+  std::mt19937 rng(4);
+  std::vector<Scan> scans;
+  for (int i = 0; i < 12; ++i) {
+    const Eigen::Vector3d origin = floatExact(-0.5 - 0.05 * i, -0.3 + 0.03 * i, 1.0);
+    Cloud cloud = wall(&rng, -4.0 + 0.01 * (i % 3), 0.05);
+    const Cloud shell = randomShell(&rng, origin, 0.5, 3.5, 500);
+    cloud.insert(cloud.end(), shell.begin(), shell.end());
+    scans.push_back({cloud, origin});
+  }
+  const Comparison result = integrateBoth(scans, 0.1, 3.6);
+  expectAgreement(result, 10000);
+}
+
+VoxelMap makeMap(double resolution) {
+  VoxelMapConfig config;
+  config.resolution = resolution;
+  return VoxelMap(config);
+}
+
+TEST(PointCloudIntegrator, MaxRangeClearsUpToTheRangeWithoutAHit) {
+  VoxelMap map = makeMap(0.1);
+  PointCloudIntegratorConfig config;
+  config.max_range = 2.0;
+  const PointCloudIntegrator integrator(config);
+  const Eigen::Vector3d origin(0.05, 0.05, 0.05);
+  // 5 m away: clipped at x = 2.05 (voxel 20), which OctoMap's rule leaves out.
+  const IntegrationStats far =
+      integrator.integrate({Eigen::Vector3f(5.05, 0.05, 0.05)}, origin, &map);
+  EXPECT_EQ(far.free_voxels, 20u);
+  EXPECT_EQ(far.occupied_voxels, 0u);
+  const float miss = map.model().missLogOdds();
+  for (int x = 0; x < 20; ++x) EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(x, 0, 0)), miss) << x;
+  EXPECT_EQ(map.occupancy(VoxelIndex(20, 0, 0)), Occupancy::kUnknown);
+  EXPECT_EQ(map.occupancy(VoxelIndex(50, 0, 0)), Occupancy::kUnknown);
+
+  // 1.5 m away along y: a hit at voxel 15, free before it.
+  const IntegrationStats near =
+      integrator.integrate({Eigen::Vector3f(0.05, 1.55, 0.05)}, origin, &map);
+  EXPECT_EQ(near.free_voxels, 15u);  // voxel (0,0,0) again, then y = 1..14
+  EXPECT_EQ(near.occupied_voxels, 1u);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(0, 15, 0)), map.model().hitLogOdds());
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(0, 14, 0)), miss);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(0, 0, 0)), 2 * miss);
+}
+
+TEST(PointCloudIntegrator, SkipsNonFinitePoints) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const Cloud good{{1.0f, 0.5f, 0.2f}, {-2.0f, 0.3f, 0.1f}, {0.4f, -1.2f, 0.9f}};
+  Cloud mixed{{nan, 0.0f, 0.0f}, good[0], {1.0f, inf, 0.0f}, good[1], good[2], {0.0f, 0.0f, -inf}};
+  const Eigen::Vector3d origin(0.01, 0.02, 0.03);
+  const PointCloudIntegrator integrator;
+  VoxelMap with_bad = makeMap(0.1);
+  VoxelMap only_good = makeMap(0.1);
+  const IntegrationStats stats = integrator.integrate(mixed, origin, &with_bad);
+  integrator.integrate(good, origin, &only_good);
+  EXPECT_EQ(stats.points, 6u);
+  EXPECT_EQ(stats.skipped_points, 3u);
+  EXPECT_EQ(stats.rays, 3u);
+  EXPECT_EQ(stats.occupied_voxels, 3u);
+  EXPECT_EQ(with_bad.knownVoxelCount(), only_good.knownVoxelCount());
+  std::size_t compared = 0;
+  only_good.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    ++compared;
+    EXPECT_EQ(with_bad.logOdds(index), log_odds);
+  });
+  EXPECT_GT(compared, 30u);
+}
+
+TEST(PointCloudIntegrator, UpdatesEachVoxelOncePerCloud) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> inside(0.201f, 0.299f);
+  Cloud cloud;  // 100 points in voxel (2, 2, 2), seen from 1.5 m away along -x
+  for (int i = 0; i < 100; ++i) cloud.emplace_back(inside(rng), inside(rng), inside(rng));
+  const Eigen::Vector3d origin(-1.25, 0.25, 0.25);
+  VoxelMap map = makeMap(0.1);
+  const PointCloudIntegrator integrator;
+  const IntegrationStats stats = integrator.integrate(cloud, origin, &map);
+  EXPECT_EQ(stats.occupied_voxels, 1u);
+  const float hit = map.model().hitLogOdds();
+  const float miss = map.model().missLogOdds();
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(2, 2, 2)), hit);
+  // Every free voxel got exactly one miss, however many of the 100 rays crossed it.
+  map.forEachFreeVoxel([&](const VoxelIndex& index, float log_odds) {
+    EXPECT_FLOAT_EQ(log_odds, miss) << index.transpose();
+  });
+  EXPECT_EQ(map.knownVoxelCount(), stats.free_voxels + 1);
+  integrator.integrate(cloud, origin, &map);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(2, 2, 2)), 2 * hit);
+}
+
+TEST(PointCloudIntegrator, OccupiedWinsOverFreeWithinACloud) {
+  // The ray to the far point crosses the near point's voxel: it gets a hit only.
+  VoxelMap map = makeMap(0.1);
+  const PointCloudIntegrator integrator;
+  integrator.integrate({Eigen::Vector3f(1.05f, 0.05f, 0.05f), Eigen::Vector3f(2.05f, 0.05f, 0.05f)},
+                       Eigen::Vector3d(0.05, 0.05, 0.05), &map);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(10, 0, 0)), map.model().hitLogOdds());
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(20, 0, 0)), map.model().hitLogOdds());
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(15, 0, 0)), map.model().missLogOdds());
+  EXPECT_EQ(map.knownVoxelCount(), 21u);
+}
+
+TEST(PointCloudIntegrator, ThreadCountDoesNotChangeTheUpdate) {
+  std::mt19937 rng(6);
+  const Eigen::Vector3d origin(-0.2, 0.4, 0.9);
+  const Cloud cloud = randomShell(&rng, origin, 0.2, 3.0, 4000);
+  const PointCloudIntegrator integrator;
+  VoxelUpdateSet serial;
+  VoxelUpdateSet parallel;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  integrator.computeUpdate(cloud, origin, 0.05, &serial);
+  omp_set_num_threads(std::max(2, threads));
+  integrator.computeUpdate(cloud, origin, 0.05, &parallel);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(serial.freeCount(), parallel.freeCount());
+  ASSERT_EQ(serial.occupiedCount(), parallel.occupiedCount());
+  std::size_t checked = 0;
+  serial.forEachFree([&](const VoxelIndex& index) {
+    ++checked;
+    ASSERT_TRUE(parallel.isFree(index));
+  });
+  serial.forEachOccupied([&](const VoxelIndex& index) { ASSERT_TRUE(parallel.isOccupied(index)); });
+  EXPECT_GT(checked, 10000u);
+}
+
+TEST(VoxelUpdateSet, MarksMergesAndCounts) {
+  const int far = VoxelMap::kMaxCoordinateVoxels - 1;
+  VoxelUpdateSet a;
+  a.markFree(VoxelIndex(-1, -1, -1));
+  a.markFree(VoxelIndex(-1, -1, -1));
+  a.markFree(VoxelIndex(far, -far, 0));
+  a.markOccupied(VoxelIndex(7, 8, -9));
+  VoxelUpdateSet b;
+  b.markOccupied(VoxelIndex(-1, -1, -1));  // occupied wins over a's free mark
+  b.markFree(VoxelIndex(0, 0, 0));
+  a.merge(b);
+  EXPECT_EQ(a.occupiedCount(), 2u);
+  EXPECT_EQ(a.freeCount(), 2u);
+  EXPECT_TRUE(a.isOccupied(VoxelIndex(-1, -1, -1)));
+  EXPECT_FALSE(a.isFree(VoxelIndex(-1, -1, -1)));
+  EXPECT_TRUE(a.isFree(VoxelIndex(far, -far, 0)));
+  EXPECT_TRUE(a.isFree(VoxelIndex(0, 0, 0)));
+  EXPECT_FALSE(a.isFree(VoxelIndex(0, 0, 1)));
+  std::vector<VoxelIndex> free_voxels;
+  a.forEachFree([&](const VoxelIndex& index) { free_voxels.push_back(index); });
+  ASSERT_EQ(free_voxels.size(), 2u);
+  for (const VoxelIndex& index : free_voxels) EXPECT_TRUE(a.isFree(index));
+  for (const BlockIndex& block : {BlockIndex(-VoxelMap::kMaxBlockCoordinate, 0, 5),
+                                  BlockIndex(VoxelMap::kMaxBlockCoordinate, -3, -1)}) {
+    EXPECT_EQ(VoxelUpdateSet::unpackBlock(VoxelUpdateSet::packBlock(block)), block);
+  }
+  VoxelUpdateSet copy = a;
+  copy.markFree(VoxelIndex(100, 100, 100));  // must not write into a's table
+  EXPECT_FALSE(a.isFree(VoxelIndex(100, 100, 100)));
+  EXPECT_TRUE(copy.isFree(VoxelIndex(100, 100, 100)));
+}
+
+TEST(PointCloudIntegratorConfig, RejectsNaNMaxRange) {
+  PointCloudIntegratorConfig config;
+  config.max_range = std::nan("");
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  EXPECT_THROW(PointCloudIntegrator{config}, std::invalid_argument);
+  config.max_range = -1.0;
+  EXPECT_NO_THROW(config.validate());
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
