@@ -41,4 +41,12 @@ VoxelMapConfig readVoxelMapConfig(const ParameterSource& source) {
   return config;
 }
 
+FusedGridConfig readFusedGridConfig(const ParameterSource& source) {
+  FusedGridConfig config;
+  source.get("occupancy_min_z", &config.min_z);
+  source.get("occupancy_max_z", &config.max_z);
+  config.validate();
+  return config;
+}
+
 }  // namespace occupancy_fusion

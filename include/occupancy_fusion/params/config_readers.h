@@ -5,6 +5,8 @@
 // naming the offending parameter.
 #pragma once
 
+#include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/params/parameter_source.h"
@@ -17,5 +19,20 @@ OccupancyModel readOccupancyModel(const ParameterSource& source);
 
 // resolution (m), the occupancy model above, max_memory_mb (MiB, 0 = unbounded).
 VoxelMapConfig readVoxelMapConfig(const ParameterSource& source);
+
+// occupancy_min_z, occupancy_max_z (m, map frame; the height band projected into the 2D grid,
+// unbounded when absent).
+FusedGridConfig readFusedGridConfig(const ParameterSource& source);
+
+// Readers of integrator configs are defined inline: the map library, which holds the readers
+// above, must not depend on the integrators library (it links the other way round).
+
+// sensor_model/max_range (m, negative = unlimited).
+inline PointCloudIntegratorConfig readPointCloudIntegratorConfig(const ParameterSource& source) {
+  PointCloudIntegratorConfig config;
+  source.get("sensor_model/max_range", &config.max_range);
+  config.validate();
+  return config;
+}
 
 }  // namespace occupancy_fusion

@@ -1,0 +1,100 @@
+// Publishes a shared map (topics of octomap_server) and serves its services. Used by the
+// MapServer nodelet and by a mapper nodelet that runs alone and publishes its own map.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <ros/ros.h>
+#include <std_srvs/Empty.h>
+
+#include "occupancy_fusion/BoundingBoxQuery.h"
+#include "occupancy_fusion/SaveMap.h"
+#include "occupancy_fusion/map/fused_grid.h"
+#include "occupancy_fusion/params/parameter_source.h"
+#include "occupancy_fusion/ros/map_registry.h"
+#include "occupancy_fusion/ros/occupied_voxel_cache.h"
+
+namespace occupancy_fusion {
+
+struct MapPublisherConfig {
+  double publish_rate = 1.0;        // Hz, how often watched outputs are refreshed
+  std::string save_prefix = "map";  // ~save_map with an empty prefix writes <save_prefix>.bt etc.
+  FusedGridConfig grid;             // occupancy_min_z / occupancy_max_z
+
+  void validate() const;  // throws std::invalid_argument naming the bad parameter
+};
+
+// publish_rate, save_prefix, occupancy_min_z, occupancy_max_z.
+MapPublisherConfig readMapPublisherConfig(const ParameterSource& source);
+
+// Wall time (ms) of the parts of the last publishing cycle, and what they handled. Outputs
+// without subscribers, or unchanged since they were last sent, cost nothing and report 0.
+struct PublishTimings {
+  std::uint64_t cycles = 0;                // publishing cycles so far
+  double cache_ms = 0.0;                   // refreshing the occupied-voxel cache
+  std::size_t cache_blocks_refreshed = 0;  // blocks re-read for it
+  bool cache_full_rebuild = false;
+  double grid_ms = 0.0;                   // fused 2D view update + message
+  std::size_t grid_blocks_processed = 0;  // map blocks the view re-read
+  double markers_ms = 0.0;                // occupied_cells_vis_array
+  double cloud_ms = 0.0;                  // octomap_point_cloud_centers
+  double binary_ms = 0.0;                 // octomap_binary (whole-map conversion)
+  std::size_t occupied_voxels = 0;        // in the cache
+  std::size_t map_blocks = 0;             // allocated in the map
+};
+
+class MapPublisher {
+ public:
+  // Topics on node_handle, services and diagnostics under private_node_handle. `name` labels log
+  // lines and diagnostics.
+  MapPublisher(const ros::NodeHandle& node_handle, const ros::NodeHandle& private_node_handle,
+               const std::string& name, std::shared_ptr<SharedMap> map,
+               const MapPublisherConfig& config);
+
+  const PublishTimings& lastTimings() const { return timings_; }
+
+ private:
+  // Versions of the map and layer an output was built from, so unchanged outputs are not resent.
+  struct SentVersion {
+    std::uint64_t voxels = 0;
+    std::uint64_t layer = 0;
+    bool operator==(const SentVersion& other) const {
+      return voxels == other.voxels && layer == other.layer;
+    }
+  };
+
+  void onTimer(const ros::TimerEvent& event);
+  void publishCycle();
+  bool needsSending(const ros::Publisher& publisher, const SentVersion& sent) const;
+  SentVersion currentVersion() const;
+  void refreshCache();
+  void publishGrid(const ros::Time& stamp);
+  void publishMarkers(const ros::Time& stamp);
+  void publishCloud(const ros::Time& stamp);
+  void publishBinary(const ros::Time& stamp);
+  void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  bool onReset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  bool onClearBox(BoundingBoxQuery::Request& request, BoundingBoxQuery::Response& response);
+  bool onSaveMap(SaveMap::Request& request, SaveMap::Response& response);
+
+  std::string name_;
+  std::shared_ptr<SharedMap> map_;
+  MapPublisherConfig config_;
+
+  OccupiedVoxelCache cache_;
+  FusedGridView grid_view_;
+  PublishTimings timings_;
+
+  SentVersion grid_sent_, markers_sent_, cloud_sent_, binary_sent_;
+  ros::Publisher grid_publisher_, markers_publisher_, cloud_publisher_, binary_publisher_;
+  ros::ServiceServer reset_service_, clear_box_service_, save_map_service_;
+  ros::Timer timer_;
+  diagnostic_updater::Updater diagnostics_;
+};
+
+}  // namespace occupancy_fusion

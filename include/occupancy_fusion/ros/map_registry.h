@@ -1,0 +1,70 @@
+// The shared map: nodelets loaded into one manager (one process) write to and read from one map
+// object, found by name in a process-wide registry. The registry holds weak references, so the
+// map lives exactly as long as some nodelet uses it; the first user creates it from its own
+// parameters and later users must agree on the geometry.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/params/parameter_source.h"
+
+namespace occupancy_fusion {
+
+struct SharedMapConfig {
+  std::string name = "map";      // registry key (parameter map_name)
+  std::string frame_id = "map";  // frame the map is expressed in (parameter frame_id)
+  VoxelMapConfig voxels;         // resolution, sensor_model/*, max_memory_mb
+  // The 2D layer shares the 3D map's resolution and sensor model, so that the fused view
+  // combines cells of the same size.
+  GridLayer2DConfig layer() const;
+
+  void validate() const;  // throws std::invalid_argument naming the bad parameter
+};
+
+// map_name, frame_id, and everything readVoxelMapConfig reads.
+SharedMapConfig readSharedMapConfig(const ParameterSource& source);
+
+// The 3D voxel map and the 2D laser layer of one map. Both are thread-safe on their own (see
+// VoxelMap); this object adds nothing that needs a lock.
+class SharedMap {
+ public:
+  explicit SharedMap(const SharedMapConfig& config);
+
+  const SharedMapConfig& config() const { return config_; }
+  const std::string& name() const { return config_.name; }
+  const std::string& frameId() const { return config_.frame_id; }
+  VoxelMap& voxels() { return voxels_; }
+  const VoxelMap& voxels() const { return voxels_; }
+  GridLayer2D& layer() { return layer_; }
+  const GridLayer2D& layer() const { return layer_; }
+
+  void reset();  // forgets everything: all voxels and cells unknown again
+
+ private:
+  SharedMapConfig config_;
+  VoxelMap voxels_;
+  GridLayer2D layer_;
+};
+
+class MapRegistry {
+ public:
+  static MapRegistry& instance();  // process-wide
+
+  // The live map called config.name, or a new one built from config when there is none.
+  // Throws std::invalid_argument when a live map of that name has another resolution or frame.
+  // *created (optional) tells which happened, so callers can warn about ignored settings.
+  std::shared_ptr<SharedMap> acquire(const SharedMapConfig& config, bool* created = nullptr);
+
+  std::size_t liveCount() const;  // maps that still have a user
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, std::weak_ptr<SharedMap>> maps_;
+};
+
+}  // namespace occupancy_fusion

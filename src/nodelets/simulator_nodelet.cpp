@@ -1,0 +1,164 @@
+// Simulator nodelet: a robot drives a circle through an analytic scene; publishes TF
+// (map -> odom -> base_link -> sensor frames) and the data of its simulated sensors, stamped with
+// the current time.
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include <nodelet/nodelet.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "occupancy_fusion/ros/ros_parameter_source.h"
+#include "occupancy_fusion/ros/simulated_sensors.h"
+#include "occupancy_fusion/sim/scenes.h"
+
+namespace occupancy_fusion {
+namespace {
+
+sim::Scene sceneNamed(const std::string& name) {
+  if (name == "room") return sim::makeRoomScene();
+  if (name == "box") return sim::makeBoxScene();
+  if (name == "spheres") return sim::makeSpheresScene();
+  if (name == "corridor") return sim::makeCorridorScene();
+  throw std::invalid_argument("scene must be one of room, box, spheres, corridor; got '" + name +
+                              "'");
+}
+
+// The robot's path: a horizontal circle at constant speed, the body turned by yaw_offset from
+// the outward radial direction, so a forward-looking sensor sweeps the whole surroundings.
+struct CirclePath {
+  double center_x = 0.0;    // m
+  double center_y = 0.0;    // m
+  double radius = 0.5;      // m
+  double period = 20.0;     // s per turn
+  double yaw_offset = 0.0;  // rad
+
+  void validate() const {
+    if (!(radius >= 0.0)) throw std::invalid_argument("trajectory/radius must be >= 0 (m)");
+    if (!(period > 0.0)) throw std::invalid_argument("trajectory/period must be positive (s)");
+  }
+
+  Eigen::Isometry3d bodyPoseAt(double seconds) const {
+    const double phase = 2.0 * M_PI * seconds / period;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(center_x + radius * std::cos(phase),
+                                         center_y + radius * std::sin(phase), 0.0);
+    pose.linear() =
+        Eigen::AngleAxisd(phase + yaw_offset, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return pose;
+  }
+};
+
+CirclePath readCirclePath(const ParameterSource& source) {
+  CirclePath path;
+  source.get("trajectory/center_x", &path.center_x);
+  source.get("trajectory/center_y", &path.center_y);
+  source.get("trajectory/radius", &path.radius);
+  source.get("trajectory/period", &path.period);
+  source.get("trajectory/yaw_offset", &path.yaw_offset);
+  path.validate();
+  return path;
+}
+
+geometry_msgs::TransformStamped stampedTransform(const Eigen::Isometry3d& parent_T_child,
+                                                 const std::string& parent,
+                                                 const std::string& child, const ros::Time& stamp) {
+  geometry_msgs::TransformStamped message = tf2::eigenToTransform(parent_T_child);
+  message.header.frame_id = parent;
+  message.header.stamp = stamp;
+  message.child_frame_id = child;
+  return message;
+}
+
+}  // namespace
+
+class Simulator : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    const RosParameterSource parameters(getPrivateNodeHandle());
+    try {
+      readParameters(parameters);
+    } catch (const std::invalid_argument& error) {
+      NODELET_FATAL("invalid parameter: %s", error.what());
+      throw;
+    }
+    start_ = ros::Time::now();
+    publishStaticTransforms();
+    ros::NodeHandle& node_handle = getNodeHandle();
+    tf_timer_ = node_handle.createTimer(
+        ros::Duration(1.0 / tf_rate_),
+        [this](const ros::TimerEvent&) { publishBodyPose(ros::Time::now()); });
+    for (const std::unique_ptr<SimulatedSensor>& sensor : sensors_) {
+      SimulatedSensor* raw = sensor.get();
+      sensor_timers_.push_back(node_handle.createTimer(
+          ros::Duration(1.0 / raw->rate()), [this, raw](const ros::TimerEvent&) {
+            // The body pose at exactly the data's stamp goes out first, so tf2 message filters
+            // downstream release the data without waiting for the next TF tick.
+            const ros::Time stamp = ros::Time::now();
+            publishBodyPose(stamp);
+            raw->publish(scene_, bodyPoseAt(stamp), stamp);
+          }));
+    }
+    NODELET_INFO("simulating scene '%s' with %zu sensor(s)", scene_name_.c_str(), sensors_.size());
+  }
+
+  void readParameters(const ParameterSource& parameters) {
+    parameters.get("scene", &scene_name_);
+    scene_ = sceneNamed(scene_name_);
+    parameters.get("map_frame", &map_frame_);
+    parameters.get("odom_frame", &odom_frame_);
+    parameters.get("base_frame", &base_frame_);
+    parameters.get("tf_rate", &tf_rate_);
+    if (!(tf_rate_ > 0.0)) throw std::invalid_argument("tf_rate must be a positive number of Hz");
+    path_ = readCirclePath(parameters);
+    sensors_.push_back(std::make_unique<SimulatedDepthCamera>(
+        getNodeHandle(), readSimulatedDepthCameraConfig(parameters, "camera/")));
+  }
+
+  Eigen::Isometry3d bodyPoseAt(const ros::Time& stamp) const {
+    return path_.bodyPoseAt((stamp - start_).toSec());
+  }
+
+  void publishStaticTransforms() {
+    // odom coincides with map: the simulated odometry does not drift.
+    std::vector<geometry_msgs::TransformStamped> transforms = {
+        stampedTransform(Eigen::Isometry3d::Identity(), map_frame_, odom_frame_, start_)};
+    for (const std::unique_ptr<SimulatedSensor>& sensor : sensors_) {
+      for (const auto& transform : sensor->staticTransforms(base_frame_)) {
+        transforms.push_back(transform);
+      }
+    }
+    static_broadcaster_.sendTransform(transforms);
+  }
+
+  void publishBodyPose(const ros::Time& stamp) {
+    if (stamp == last_body_stamp_) return;  // tf2 rejects repeated stamps
+    last_body_stamp_ = stamp;
+    broadcaster_.sendTransform(
+        stampedTransform(bodyPoseAt(stamp), odom_frame_, base_frame_, stamp));
+  }
+
+  std::string scene_name_ = "room";
+  sim::Scene scene_;
+  std::string map_frame_ = "map";
+  std::string odom_frame_ = "odom";
+  std::string base_frame_ = "base_link";
+  double tf_rate_ = 30.0;
+  CirclePath path_;
+  std::vector<std::unique_ptr<SimulatedSensor>> sensors_;
+
+  ros::Time start_;
+  ros::Time last_body_stamp_;
+  tf2_ros::TransformBroadcaster broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+  ros::Timer tf_timer_;
+  std::vector<ros::Timer> sensor_timers_;
+};
+
+}  // namespace occupancy_fusion
+
+PLUGINLIB_EXPORT_CLASS(occupancy_fusion::Simulator, nodelet::Nodelet)

@@ -1,0 +1,22 @@
+// Runs the occupancy_fusion/MapServer nodelet in its own process, under this node's name, so its
+// private parameters are this node's ~ parameters.
+#include <exception>
+
+#include <nodelet/loader.h>
+#include <ros/ros.h>
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "map_server");
+  nodelet::Loader loader;
+  try {
+    if (!loader.load(ros::this_node::getName(), "occupancy_fusion/MapServer",
+                     ros::names::getRemappings(), nodelet::V_string())) {
+      return 1;
+    }
+  } catch (const std::exception& error) {
+    ROS_FATAL("%s", error.what());
+    return 1;
+  }
+  ros::spin();
+  return 0;
+}

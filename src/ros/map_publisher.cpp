@@ -1,0 +1,305 @@
+#include "occupancy_fusion/ros/map_publisher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <nav_msgs/OccupancyGrid.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "occupancy_fusion/Octomap.h"
+#include "occupancy_fusion/map/map_files.h"
+#include "occupancy_fusion/map/octomap_conversion.h"
+#include "occupancy_fusion/params/config_readers.h"
+#include "occupancy_fusion/ros/conversions.h"
+
+namespace occupancy_fusion {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Rainbow from blue (low) to red (high) over the height range of the occupied voxels, so floors,
+// furniture and ceilings read apart (octomap_server colours by height the same way).
+std_msgs::ColorRGBA heightColor(double normalized_height) {
+  const double hue = (1.0 - std::clamp(normalized_height, 0.0, 1.0)) * 240.0;  // degrees
+  const double sector = hue / 60.0;
+  const double fraction = sector - std::floor(sector);
+  double r = 0.0, g = 0.0, b = 0.0;
+  switch (static_cast<int>(sector)) {
+    case 0:
+      r = 1.0;
+      g = fraction;
+      break;
+    case 1:
+      r = 1.0 - fraction;
+      g = 1.0;
+      break;
+    case 2:
+      g = 1.0;
+      b = fraction;
+      break;
+    default:
+      g = 1.0 - fraction;
+      b = 1.0;
+      break;
+  }
+  std_msgs::ColorRGBA color;
+  color.r = static_cast<float>(r);
+  color.g = static_cast<float>(g);
+  color.b = static_cast<float>(b);
+  color.a = 1.0f;
+  return color;
+}
+
+}  // namespace
+
+void MapPublisherConfig::validate() const {
+  if (!(publish_rate > 0.0) || !std::isfinite(publish_rate)) {
+    throw std::invalid_argument("publish_rate must be a positive number of Hz, got " +
+                                std::to_string(publish_rate));
+  }
+  if (save_prefix.empty()) throw std::invalid_argument("save_prefix must not be empty");
+  grid.validate();
+}
+
+MapPublisherConfig readMapPublisherConfig(const ParameterSource& source) {
+  MapPublisherConfig config;
+  source.get("publish_rate", &config.publish_rate);
+  source.get("save_prefix", &config.save_prefix);
+  config.grid = readFusedGridConfig(source);
+  config.validate();
+  return config;
+}
+
+MapPublisher::MapPublisher(const ros::NodeHandle& node_handle,
+                           const ros::NodeHandle& private_node_handle, const std::string& name,
+                           std::shared_ptr<SharedMap> map, const MapPublisherConfig& config)
+    : name_(name),
+      map_(std::move(map)),
+      config_(config),
+      grid_view_(config.grid),
+      diagnostics_(node_handle, private_node_handle, name) {
+  config_.validate();
+  ros::NodeHandle topics(node_handle);
+  // Latched: a late subscriber gets the last map at once instead of waiting for a change.
+  grid_publisher_ = topics.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, true);
+  markers_publisher_ =
+      topics.advertise<visualization_msgs::MarkerArray>("occupied_cells_vis_array", 1, true);
+  cloud_publisher_ =
+      topics.advertise<sensor_msgs::PointCloud2>("octomap_point_cloud_centers", 1, true);
+  binary_publisher_ = topics.advertise<Octomap>("octomap_binary", 1, true);
+
+  ros::NodeHandle services(private_node_handle);
+  reset_service_ = services.advertiseService("reset", &MapPublisher::onReset, this);
+  clear_box_service_ = services.advertiseService("clear_bbx", &MapPublisher::onClearBox, this);
+  save_map_service_ = services.advertiseService("save_map", &MapPublisher::onSaveMap, this);
+
+  diagnostics_.setHardwareID("map '" + map_->name() + "'");
+  diagnostics_.add("map publishing", this, &MapPublisher::fillDiagnostics);
+  timer_ =
+      topics.createTimer(ros::Duration(1.0 / config_.publish_rate), &MapPublisher::onTimer, this);
+}
+
+void MapPublisher::onTimer(const ros::TimerEvent& /*event*/) {
+  publishCycle();
+  diagnostics_.update();
+}
+
+MapPublisher::SentVersion MapPublisher::currentVersion() const {
+  return {map_->voxels().version(), map_->layer().version()};
+}
+
+bool MapPublisher::needsSending(const ros::Publisher& publisher, const SentVersion& sent) const {
+  return publisher.getNumSubscribers() > 0 && !(sent == currentVersion());
+}
+
+void MapPublisher::publishCycle() {
+  const ros::Time stamp = ros::Time::now();
+  PublishTimings& t = timings_;
+  const std::uint64_t cycles = t.cycles + 1;
+  t = PublishTimings();
+  t.cycles = cycles;
+  if (needsSending(grid_publisher_, grid_sent_)) publishGrid(stamp);
+  const bool markers = needsSending(markers_publisher_, markers_sent_);
+  const bool cloud = needsSending(cloud_publisher_, cloud_sent_);
+  if (markers || cloud) refreshCache();
+  if (markers) publishMarkers(stamp);
+  if (cloud) publishCloud(stamp);
+  if (needsSending(binary_publisher_, binary_sent_)) publishBinary(stamp);
+  t.occupied_voxels = cache_.occupiedCount();
+  t.map_blocks = map_->voxels().blockCount();
+  ROS_DEBUG_NAMED("publishing",
+                  "%s: cache %.2f ms (%zu blocks%s), grid %.2f ms (%zu blocks), markers %.2f ms, "
+                  "cloud %.2f ms, binary %.2f ms; %zu occupied voxels in %zu blocks",
+                  name_.c_str(), t.cache_ms, t.cache_blocks_refreshed,
+                  t.cache_full_rebuild ? ", full rebuild" : "", t.grid_ms, t.grid_blocks_processed,
+                  t.markers_ms, t.cloud_ms, t.binary_ms, t.occupied_voxels, t.map_blocks);
+}
+
+void MapPublisher::refreshCache() {
+  const auto start = Clock::now();
+  const OccupiedVoxelCache::RefreshStats stats = cache_.refresh(map_->voxels());
+  timings_.cache_ms = millisecondsSince(start);
+  timings_.cache_blocks_refreshed = stats.blocks_refreshed;
+  timings_.cache_full_rebuild = stats.full_rebuild;
+}
+
+void MapPublisher::publishGrid(const ros::Time& stamp) {
+  const auto start = Clock::now();
+  const SentVersion version = currentVersion();  // read before: later writes are sent next time
+  const OccupancyRaster raster = grid_view_.update(map_->voxels(), &map_->layer());
+  auto grid = boost::make_shared<nav_msgs::OccupancyGrid>();
+  toOccupancyGridMessage(raster, map_->frameId(), stamp, grid.get());
+  grid_publisher_.publish(grid);
+  grid_sent_ = version;
+  timings_.grid_ms = millisecondsSince(start);
+  timings_.grid_blocks_processed = grid_view_.lastUpdateStats().map_blocks_processed;
+}
+
+void MapPublisher::publishMarkers(const ros::Time& stamp) {
+  const auto start = Clock::now();
+  float min_z = std::numeric_limits<float>::infinity();
+  float max_z = -std::numeric_limits<float>::infinity();
+  cache_.forEachCentre([&](const Eigen::Vector3f& centre) {
+    min_z = std::min(min_z, centre.z());
+    max_z = std::max(max_z, centre.z());
+  });
+  const double height_span = std::max(1e-6, static_cast<double>(max_z) - min_z);
+
+  auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
+  visualization_msgs::Marker cubes;
+  cubes.header.frame_id = map_->frameId();
+  cubes.header.stamp = stamp;
+  cubes.ns = "occupied_cells";
+  cubes.id = 0;
+  cubes.type = visualization_msgs::Marker::CUBE_LIST;
+  cubes.pose.orientation.w = 1.0;
+  cubes.scale.x = cubes.scale.y = cubes.scale.z = map_->voxels().resolution();
+  cubes.color.a = 1.0f;
+  cubes.points.reserve(cache_.occupiedCount());
+  cubes.colors.reserve(cache_.occupiedCount());
+  cache_.forEachCentre([&](const Eigen::Vector3f& centre) {
+    geometry_msgs::Point point;
+    point.x = centre.x();
+    point.y = centre.y();
+    point.z = centre.z();
+    cubes.points.push_back(point);
+    cubes.colors.push_back(heightColor((centre.z() - min_z) / height_span));
+  });
+  // An empty CUBE_LIST is removed rather than sent (rviz keeps the last one otherwise).
+  cubes.action =
+      cubes.points.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+  markers->markers.push_back(std::move(cubes));
+  markers_publisher_.publish(markers);
+  markers_sent_ = {cache_.mapVersion(), map_->layer().version()};
+  timings_.markers_ms = millisecondsSince(start);
+}
+
+void MapPublisher::publishCloud(const ros::Time& stamp) {
+  const auto start = Clock::now();
+  auto cloud = boost::make_shared<sensor_msgs::PointCloud2>();
+  cloud->header.frame_id = map_->frameId();
+  cloud->header.stamp = stamp;
+  resizeXyzCloud(cache_.occupiedCount(), cloud.get());
+  sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z");
+  cache_.forEachCentre([&](const Eigen::Vector3f& centre) {
+    *x = centre.x();
+    *y = centre.y();
+    *z = centre.z();
+    ++x, ++y, ++z;
+  });
+  cloud_publisher_.publish(cloud);
+  cloud_sent_ = {cache_.mapVersion(), map_->layer().version()};
+  timings_.cloud_ms = millisecondsSince(start);
+}
+
+void MapPublisher::publishBinary(const ros::Time& stamp) {
+  // The message holds the whole tree, so this cost necessarily follows the map's size.
+  const auto start = Clock::now();
+  const SentVersion version = currentVersion();
+  const std::unique_ptr<octomap::OcTree> tree = toOcTree(map_->voxels());
+  std::stringstream stream;
+  tree->writeBinaryData(stream);
+  const std::string bytes = stream.str();
+  auto message = boost::make_shared<Octomap>();
+  message->header.frame_id = map_->frameId();
+  message->header.stamp = stamp;
+  message->binary = true;
+  message->id = tree->getTreeType();
+  message->resolution = tree->getResolution();
+  message->data.assign(bytes.begin(), bytes.end());
+  binary_publisher_.publish(message);
+  binary_sent_ = version;
+  timings_.binary_ms = millisecondsSince(start);
+}
+
+void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const PublishTimings& t = timings_;
+  const VoxelMap& voxels = map_->voxels();
+  status.summary(diagnostic_msgs::DiagnosticStatus::OK, "publishing");
+  status.add("publish cycles", t.cycles);
+  status.add("cache ms", t.cache_ms);
+  status.add("cache blocks refreshed", t.cache_blocks_refreshed);
+  status.add("cache full rebuild", t.cache_full_rebuild);
+  status.add("grid ms", t.grid_ms);
+  status.add("grid blocks processed", t.grid_blocks_processed);
+  status.add("markers ms", t.markers_ms);
+  status.add("cloud ms", t.cloud_ms);
+  status.add("binary ms", t.binary_ms);
+  status.add("occupied voxels", t.occupied_voxels);
+  status.add("map blocks", voxels.blockCount());
+  status.add("known voxels", voxels.knownVoxelCount());
+  status.add("memory bytes", voxels.memoryBytes());
+  status.add("evicted blocks", voxels.evictedBlockCount());
+  status.add("layer cells", map_->layer().knownCellCount());
+}
+
+bool MapPublisher::onReset(std_srvs::Empty::Request& /*request*/,
+                           std_srvs::Empty::Response& /*response*/) {
+  map_->reset();
+  ROS_INFO("%s: map '%s' reset", name_.c_str(), map_->name().c_str());
+  return true;
+}
+
+bool MapPublisher::onClearBox(BoundingBoxQuery::Request& request,
+                              BoundingBoxQuery::Response& /*response*/) {
+  const Eigen::Vector3d min(request.min.x, request.min.y, request.min.z);
+  const Eigen::Vector3d max(request.max.x, request.max.y, request.max.z);
+  const std::size_t voxels = map_->voxels().clearBox(min, max);
+  // The 2D layer has no height: its cells under the box's footprint are cleared too.
+  const std::size_t cells = map_->layer().clearBox(min.head<2>(), max.head<2>());
+  ROS_INFO("%s: cleared %zu voxels and %zu layer cells in [%.2f %.2f %.2f] - [%.2f %.2f %.2f]",
+           name_.c_str(), voxels, cells, min.x(), min.y(), min.z(), max.x(), max.y(), max.z());
+  return true;
+}
+
+bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
+  const std::string prefix = request.prefix.empty() ? config_.save_prefix : request.prefix;
+  try {
+    const std::string bt_path = prefix + ".bt";
+    writeBt(map_->voxels(), bt_path);
+    response.files.push_back(bt_path);
+    FusedGridView view(config_.grid);
+    const OccupancyRaster raster = view.update(map_->voxels(), &map_->layer());
+    writeMapServerFiles(raster, prefix);  // throws for an empty map, after the .bt is written
+    response.files.push_back(prefix + ".pgm");
+    response.files.push_back(prefix + ".yaml");
+    response.success = true;
+    response.message = "saved map '" + map_->name() + "' as " + prefix + ".{bt,pgm,yaml}";
+    ROS_INFO("%s: %s", name_.c_str(), response.message.c_str());
+  } catch (const std::exception& error) {
+    response.success = false;
+    response.message = error.what();
+    ROS_ERROR("%s: saving the map to '%s' failed: %s", name_.c_str(), prefix.c_str(), error.what());
+  }
+  return true;
+}
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,78 @@
+#include "occupancy_fusion/ros/map_registry.h"
+
+#include <sstream>
+#include <stdexcept>
+
+#include "occupancy_fusion/params/config_readers.h"
+
+namespace occupancy_fusion {
+
+GridLayer2DConfig SharedMapConfig::layer() const {
+  GridLayer2DConfig layer_config;
+  layer_config.resolution = voxels.resolution;
+  layer_config.model = voxels.model;
+  return layer_config;
+}
+
+void SharedMapConfig::validate() const {
+  if (name.empty()) throw std::invalid_argument("map_name must not be empty");
+  if (frame_id.empty()) throw std::invalid_argument("frame_id must not be empty");
+  voxels.validate();
+}
+
+SharedMapConfig readSharedMapConfig(const ParameterSource& source) {
+  SharedMapConfig config;
+  source.get("map_name", &config.name);
+  source.get("frame_id", &config.frame_id);
+  config.voxels = readVoxelMapConfig(source);
+  config.validate();
+  return config;
+}
+
+SharedMap::SharedMap(const SharedMapConfig& config)
+    : config_(config), voxels_(config.voxels), layer_(config.layer()) {}
+
+void SharedMap::reset() {
+  voxels_.reset();
+  layer_.reset();
+}
+
+MapRegistry& MapRegistry::instance() {
+  static MapRegistry registry;
+  return registry;
+}
+
+std::shared_ptr<SharedMap> MapRegistry::acquire(const SharedMapConfig& config, bool* created) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::weak_ptr<SharedMap>& slot = maps_[config.name];
+  std::shared_ptr<SharedMap> map = slot.lock();
+  if (created) *created = !map;
+  if (!map) {
+    map = std::make_shared<SharedMap>(config);
+    slot = map;
+    return map;
+  }
+  if (map->config().voxels.resolution != config.voxels.resolution) {
+    std::ostringstream message;
+    message << "resolution " << config.voxels.resolution << " does not match the resolution "
+            << map->config().voxels.resolution << " of the shared map '" << config.name
+            << "' already created in this nodelet manager; give every nodelet of a manager the "
+               "same resolution, or a different map_name";
+    throw std::invalid_argument(message.str());
+  }
+  if (map->frameId() != config.frame_id) {
+    throw std::invalid_argument("frame_id '" + config.frame_id + "' does not match the frame '" +
+                                map->frameId() + "' of the shared map '" + config.name +
+                                "' already created in this nodelet manager");
+  }
+  return map;
+}
+
+std::size_t MapRegistry::liveCount() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::size_t live = 0;
+  for (const auto& entry : maps_) live += entry.second.expired() ? 0 : 1;
+  return live;
+}
+
+}  // namespace occupancy_fusion

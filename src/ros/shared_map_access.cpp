@@ -1,0 +1,38 @@
+#include "occupancy_fusion/ros/shared_map_access.h"
+
+#include <ros/console.h>
+
+namespace occupancy_fusion {
+namespace {
+
+bool sameModel(const OccupancyModel& a, const OccupancyModel& b) {
+  return a.prob_hit == b.prob_hit && a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min &&
+         a.clamp_max == b.clamp_max && a.occupancy_threshold == b.occupancy_threshold;
+}
+
+}  // namespace
+
+std::shared_ptr<SharedMap> acquireSharedMap(const ParameterSource& parameters,
+                                            const std::string& nodelet_name) {
+  const SharedMapConfig wanted = readSharedMapConfig(parameters);
+  bool created = false;
+  std::shared_ptr<SharedMap> map = MapRegistry::instance().acquire(wanted, &created);
+  if (created) {
+    ROS_INFO("%s: created map '%s' (frame '%s', resolution %.3f m)", nodelet_name.c_str(),
+             map->name().c_str(), map->frameId().c_str(), map->voxels().resolution());
+    return map;
+  }
+  ROS_INFO("%s: sharing map '%s' (frame '%s', resolution %.3f m)", nodelet_name.c_str(),
+           map->name().c_str(), map->frameId().c_str(), map->voxels().resolution());
+  const VoxelMapConfig& existing = map->config().voxels;
+  if (!sameModel(existing.model, wanted.voxels.model) ||
+      existing.max_memory_bytes != wanted.voxels.max_memory_bytes) {
+    ROS_WARN(
+        "%s: sensor_model/* or max_memory_mb differ from those of the shared map '%s', "
+        "which keeps the settings of the nodelet that created it",
+        nodelet_name.c_str(), map->name().c_str());
+  }
+  return map;
+}
+
+}  // namespace occupancy_fusion
