@@ -1,0 +1,49 @@
+// Ready-made scenes. All use the world frame of REP-103 (x forward, y left, z up, metres).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "occupancy_fusion/sim/scene.h"
+
+namespace occupancy_fusion {
+namespace sim {
+
+// BOX scene of the depth paper (Sec. 5.1, Fig. 3a): 10.8 x 8.3 x 11.2 m^3 holding six objects
+// of 1 m width at different depths. The figure is not available; this layout is our reading.
+// The paper's camera frame (x right, y down, z forward) maps onto the world as depth = +x,
+// width = y, height = z, so the scene's bounds are exactly 11.2 (x) x 10.8 (y) x 8.3 (z):
+// a closed room of 0.2 m thick slabs (outer x in [-1.2, 10], y in [-5.4, 5.4], z in [-0.2, 8.1];
+// floor top at z = 0) so every ray of the sweep hits a surface, and inside it, seen from
+// boxSceneCameraPosition() looking along +x, six objects whose near sides lie at depths
+// 2, 3.5, 5, ~6.3, 8 and 8.8 m:
+//   1 m cube on the floor; sphere of 1 m diameter floating at z = 1; upright cylinder of 1 m
+//   diameter, 2.5 m high; 1 x 1 x 2 m box turned 30 deg about z; 1 x 1 x 4 m pillar; 1 m cube
+//   fixed to the back wall at z = 2..3.
+Scene makeBoxScene();
+Eigen::Vector3d boxSceneCameraPosition();  // (0, 0, 1.5): centre of the paper's sweep
+
+// SPHERES scene of the depth paper (Sec. 5.1, Fig. 3b): 2.2 x 2.1 x 2 m^3 holding a box and
+// four spheres of variable size (our layout): width 2.2 along y (y in [-1.1, 1.1]), height 2.1
+// along z (z in [0, 2.1]), depth 2 along x (x in [0, 2]). A 0.6 x 0.8 x 2.1 m box stands at
+// the back left; spheres of radius 0.5, 0.4, 0.3 and 0.2 m rest on z = 0 at depths from 0 to
+// 1.5 m. No floor, so the bounds are the objects' own.
+Scene makeSpheresScene();
+Eigen::Vector3d spheresSceneCameraPosition();  // (-2, 0, 1.05): 2 m in front, mid-height
+
+// A straight corridor for stereo and laser tests: floor (half-space z <= 0), inner width 2.4 m
+// (y in [-1.2, 1.2]) between 0.2 m thick, 2.5 m high walls, from an open end at x = 0 to an
+// end wall at x = 20; a 1 m doorway in the left wall at x in [7, 8] (open behind it); three
+// pillars (cylinders, r = 0.15 m) against the walls at x = 4, 9 and 14; three boxes on the floor
+// at x = 6, 11.5 (turned 20 deg) and 17 (0.4 m high). No ceiling.
+Scene makeCorridorScene();
+
+// The demo room: 8 x 6 x 2.5 m (x in [-4, 4], y in [-3, 3]), floor (half-space z <= 0), 0.1 m
+// thick walls along the inside of that outline, no ceiling; a table-like box
+// (1.6 x 0.9 x 0.75 m) at (1.5, 1.0), an upright cylinder (r = 0.25 m, 1.2 m high) at
+// (-2, -1.5), a sphere (r = 0.4 m) resting on the floor at (-1.5, 1.6) and a cabinet
+// (0.8 x 0.5 x 1.8 m) against the right wall at (2.8, -2.65). The centre (0, 0) is free, so
+// sensors can move around it.
+Scene makeRoomScene();
+
+}  // namespace sim
+}  // namespace occupancy_fusion

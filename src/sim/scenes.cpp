@@ -1,0 +1,84 @@
+#include "occupancy_fusion/sim/scenes.h"
+
+#include <cmath>
+
+namespace occupancy_fusion {
+namespace sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Box aabb(double x0, double y0, double z0, double x1, double y1, double z1) {
+  return Box::axisAligned({x0, y0, z0}, {x1, y1, z1});
+}
+
+Plane floorAtZero() { return Plane{Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()}; }
+
+}  // namespace
+
+Scene makeBoxScene() {
+  Scene scene;
+  // Shell: floor, ceiling, back (behind the camera), front, right (-y) and left (+y) slabs.
+  scene.add(aabb(-1.2, -5.4, -0.2, 10.0, 5.4, 0.0))
+      .add(aabb(-1.2, -5.4, 7.9, 10.0, 5.4, 8.1))
+      .add(aabb(-1.2, -5.4, 0.0, -1.0, 5.4, 7.9))
+      .add(aabb(9.8, -5.4, 0.0, 10.0, 5.4, 7.9))
+      .add(aabb(-1.0, -5.4, 0.0, 9.8, -5.2, 7.9))
+      .add(aabb(-1.0, 5.2, 0.0, 9.8, 5.4, 7.9));
+  // Six 1 m wide objects at increasing depth, spread sideways so each stays partly visible.
+  scene.add(aabb(2.0, -0.9, 0.0, 3.0, 0.1, 1.0))
+      .add(Sphere{Eigen::Vector3d(4.0, 0.8, 1.0), 0.5})
+      .add(Cylinder::upright(5.5, -1.6, 0.0, 0.5, 2.5))
+      .add(Box::yawed(Eigen::Vector3d(7.0, 2.4, 1.0), Eigen::Vector3d(1.0, 1.0, 2.0), kPi / 6))
+      .add(aabb(8.0, -4.0, 0.0, 9.0, -3.0, 4.0))
+      .add(aabb(8.8, 0.0, 2.0, 9.8, 1.0, 3.0));
+  return scene;
+}
+
+Eigen::Vector3d boxSceneCameraPosition() { return {0.0, 0.0, 1.5}; }
+
+Scene makeSpheresScene() {
+  Scene scene;
+  scene.add(aabb(1.4, -1.1, 0.0, 2.0, -0.3, 2.1))
+      .add(Sphere{Eigen::Vector3d(1.5, 0.6, 0.5), 0.5})
+      .add(Sphere{Eigen::Vector3d(0.9, -0.6, 0.4), 0.4})
+      .add(Sphere{Eigen::Vector3d(0.3, 0.75, 0.3), 0.3})
+      .add(Sphere{Eigen::Vector3d(0.2, -0.1, 0.2), 0.2});
+  return scene;
+}
+
+Eigen::Vector3d spheresSceneCameraPosition() { return {-2.0, 0.0, 1.05}; }
+
+Scene makeCorridorScene() {
+  Scene scene;
+  scene.add(floorAtZero())
+      .add(aabb(0.0, -1.4, 0.0, 20.2, -1.2, 2.5))  // right wall
+      .add(aabb(0.0, 1.2, 0.0, 7.0, 1.4, 2.5))     // left wall, before the doorway
+      .add(aabb(8.0, 1.2, 0.0, 20.2, 1.4, 2.5))    // left wall, after the doorway
+      .add(aabb(20.0, -1.2, 0.0, 20.2, 1.2, 2.5))  // end wall
+      .add(Cylinder::upright(4.0, 1.05, 0.0, 0.15, 2.5))
+      .add(Cylinder::upright(9.0, -1.05, 0.0, 0.15, 2.5))
+      .add(Cylinder::upright(14.0, 1.05, 0.0, 0.15, 2.5))
+      .add(aabb(5.7, -1.0, 0.0, 6.3, -0.4, 0.8))
+      .add(Box::yawed(Eigen::Vector3d(11.5, 0.6, 0.5), Eigen::Vector3d(0.8, 0.5, 1.0),
+                      20.0 * kPi / 180.0))
+      .add(aabb(16.75, -0.75, 0.0, 17.25, -0.25, 0.4));
+  return scene;
+}
+
+Scene makeRoomScene() {
+  Scene scene;
+  scene.add(floorAtZero())
+      .add(aabb(-4.0, -3.0, 0.0, 4.0, -2.9, 2.5))  // right wall (-y)
+      .add(aabb(-4.0, 2.9, 0.0, 4.0, 3.0, 2.5))    // left wall (+y)
+      .add(aabb(-4.0, -2.9, 0.0, -3.9, 2.9, 2.5))  // back wall (-x)
+      .add(aabb(3.9, -2.9, 0.0, 4.0, 2.9, 2.5))    // front wall (+x)
+      .add(aabb(0.7, 0.55, 0.0, 2.3, 1.45, 0.75))  // table
+      .add(Cylinder::upright(-2.0, -1.5, 0.0, 0.25, 1.2))
+      .add(Sphere{Eigen::Vector3d(-1.5, 1.6, 0.4), 0.4})
+      .add(aabb(2.4, -2.9, 0.0, 3.2, -2.4, 1.8));  // cabinet
+  return scene;
+}
+
+}  // namespace sim
+}  // namespace occupancy_fusion
