@@ -149,7 +149,8 @@ struct IntegrationStats {
 // free, except the voxel holding the point, which is marked occupied; a point beyond max_range
 // marks free the voxels up to origin + max_range * direction (that end voxel excluded) and no
 // hit. Each voxel then gets one update per cloud: a hit if any ray ended in it, else a miss.
-// Rays are cast on all OpenMP threads.
+// Rays are cast on omp_get_max_threads() threads. (Beware: OctoMap's insertPointCloud, compiled
+// from its headers into an OpenMP program, sets that count to its own, 1 in Debian's build.)
 class PointCloudIntegrator {
  public:
   explicit PointCloudIntegrator(const PointCloudIntegratorConfig& config = {});  // validates

@@ -78,13 +78,24 @@ class RayTraversal {
   // Moves to the next voxel: towards the end voxel while before it, then along the ray beyond.
   // Beyond the end of a zero-length segment there is nowhere to go: current() stays.
   void next() {
-    if (steps_left_ == 0) startBeyond();
+    if (steps_left_ > 0) {
+      stepTowardsEnd();
+      return;
+    }
+    startBeyond();
     const int axis = nextAxis();
     if (t_max_[axis] == kInfinity) return;  // zero-length ray, beyond the end
     current_[axis] += step_[axis];
     t_entry_ = t_max_[axis];
     t_max_[axis] += t_delta_[axis];
-    if (beyond_) return;
+  }
+
+  // next() for the hot loop of a segment walk. Precondition: beforeEnd().
+  void stepTowardsEnd() {
+    const int axis = nextAxis();
+    current_[axis] += step_[axis];
+    t_entry_ = t_max_[axis];
+    t_max_[axis] += t_delta_[axis];
     --steps_left_;
     if (--remaining_[axis] == 0) {
       beyond_t_max_[axis] = t_max_[axis];
@@ -134,7 +145,7 @@ int forEachVoxelOnRay(const Eigen::Vector3d& start, const Eigen::Vector3d& end, 
   RayTraversal ray(start, end, resolution);
   const int count = ray.stepsToEnd() + (end_mode == RayEnd::kInclude ? 1 : 0);
   for (int i = 0; i < count; ++i) {
-    if (i > 0) ray.next();
+    if (i > 0) ray.stepTowardsEnd();
     if constexpr (std::is_same_v<std::invoke_result_t<VoxelFn&, const VoxelIndex&>, bool>) {
       if (!fn(ray.current())) return i + 1;
     } else {

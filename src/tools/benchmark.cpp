@@ -1,0 +1,252 @@
+// benchmark: times the package's integrators against their baselines on simulated data.
+//
+//   benchmark <workload> [options]
+//
+// One subcommand per workload; each prints one line per case of "key=value" fields, so results
+// are easy to grep and compare. Timings are medians over repetitions, each repetition starting
+// from empty maps.
+#include <octomap/OcTree.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/sim/depth_camera.h"
+#include "occupancy_fusion/sim/scenes.h"
+#include "occupancy_fusion/sim/trajectory.h"
+#include "occupancy_fusion/tools/command_line.h"
+
+namespace occupancy_fusion {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Harness
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// "0.05,0.1" -> {0.05, 0.1}; UsageError naming the option on anything else.
+template <typename T>
+std::vector<T> parseList(const std::string& option, const std::string& text) {
+  std::vector<T> values;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    std::istringstream parser(item);
+    T value;
+    if (!(parser >> value) || !parser.eof() || !(value > T{0})) {
+      throw UsageError("--" + option + " needs positive numbers separated by commas, got '" + text +
+                       "'");
+    }
+    values.push_back(value);
+  }
+  if (values.empty()) throw UsageError("--" + option + " is empty");
+  return values;
+}
+
+int positiveInt(const CommandLine& args, const std::string& option, int fallback) {
+  const int value = args.intValue(option, fallback);
+  if (value < 1) throw UsageError("--" + option + " must be at least 1");
+  return value;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Simulated input
+
+struct SensorCloud {
+  std::vector<Eigen::Vector3f> points;  // map frame
+  Eigen::Vector3d origin;               // map frame, exactly representable as float
+};
+
+// A depth camera of about `points` pixels (4:3, the field of view of a 640 x 480 camera with
+// fx = 525 px) orbiting in the simulator's demo room and looking across it; the points of
+// each frame in the map frame, as the point-cloud mapper receives them.
+std::vector<SensorCloud> roomClouds(int clouds, int points) {
+  sim::PinholeCamera camera;
+  camera.width = std::max(4, static_cast<int>(std::lround(std::sqrt(points * 4.0 / 3.0))));
+  camera.height = std::max(3, (points + camera.width - 1) / camera.width);
+  camera.fx = camera.fy = 525.0 * camera.width / 640.0;
+  camera.cx = 0.5 * (camera.width - 1);
+  camera.cy = 0.5 * (camera.height - 1);
+  const sim::Scene scene = sim::makeRoomScene();
+  const std::vector<Eigen::Isometry3d> poses = sim::orbitTrajectory(
+      Eigen::Vector3d::Zero(), 0.6, 1.2, clouds, Eigen::Vector3d(0.0, 0.0, 0.9));
+  constexpr double kRenderRange = 12.0;  // m, beyond the room's diagonal
+  std::vector<SensorCloud> result;
+  for (Eigen::Isometry3d pose : poses) {
+    pose.translation() = pose.translation().cast<float>().cast<double>();
+    SensorCloud cloud;
+    cloud.origin = pose.translation();
+    for (const Eigen::Vector3d& p : sim::renderPointCloud(scene, camera, pose, kRenderRange)) {
+      cloud.points.push_back((pose * p).cast<float>());
+    }
+    result.push_back(std::move(cloud));
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// pointcloud: PointCloudIntegrator vs octomap::OcTree::insertPointCloud
+
+struct RunResult {
+  double ms_per_cloud = 0.0;
+  std::size_t memory_bytes = 0;
+};
+
+RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, double max_range) {
+  VoxelMapConfig map_config;
+  map_config.resolution = resolution;
+  VoxelMap map(map_config);
+  PointCloudIntegratorConfig config;
+  config.max_range = max_range;
+  const PointCloudIntegrator integrator(config);
+  const auto start = Clock::now();
+  for (const SensorCloud& cloud : clouds) integrator.integrate(cloud.points, cloud.origin, &map);
+  return {millisecondsSince(start) / clouds.size(), map.memoryBytes()};
+}
+
+RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
+                     const std::vector<SensorCloud>& sources, double resolution, double max_range) {
+  const OccupancyModel model;
+  octomap::OcTree tree(resolution);
+  tree.setProbHit(model.prob_hit);
+  tree.setProbMiss(model.prob_miss);
+  tree.setClampingThresMin(model.clamp_min);
+  tree.setClampingThresMax(model.clamp_max);
+  const auto start = Clock::now();
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    const Eigen::Vector3d& o = sources[i].origin;
+    tree.insertPointCloud(clouds[i], octomap::point3d(o.x(), o.y(), o.z()), max_range, false,
+                          false);
+  }
+  return {millisecondsSince(start) / clouds.size(), tree.memoryUsage()};
+}
+
+int runPointCloud(const CommandLine& args) {
+  const std::vector<double> resolutions =
+      parseList<double>("resolution", args.value("resolution", "0.05,0.1"));
+  const std::vector<int> point_counts = parseList<int>("points", args.value("points", "20000"));
+  const int cloud_count = positiveInt(args, "clouds", 10);
+  const int repetitions = positiveInt(args, "repetitions", 3);
+  const double max_range = args.doubleValue("max_range", -1.0);
+  const int threads = omp_get_max_threads();
+
+  for (int points : point_counts) {
+    const std::vector<SensorCloud> clouds = roomClouds(cloud_count, points);
+    std::vector<octomap::Pointcloud> octomap_clouds(clouds.size());
+    std::size_t total_points = 0;
+    for (std::size_t i = 0; i < clouds.size(); ++i) {
+      for (const Eigen::Vector3f& p : clouds[i].points)
+        octomap_clouds[i].push_back(p.x(), p.y(), p.z());
+      total_points += clouds[i].points.size();
+    }
+    for (double resolution : resolutions) {
+      std::vector<double> ours_ms, octomap_ms;
+      RunResult ours, theirs;
+      for (int r = 0; r < repetitions; ++r) {
+        // OctoMap's insertPointCloud (compiled here from its headers) sets the OpenMP thread
+        // count to its number of key rays, 1 in Debian's build: give ours its threads back.
+        omp_set_num_threads(threads);
+        ours = runOurs(clouds, resolution, max_range);
+        theirs = runOctomap(octomap_clouds, clouds, resolution, max_range);
+        ours_ms.push_back(ours.ms_per_cloud);
+        octomap_ms.push_back(theirs.ms_per_cloud);
+      }
+      const double ours_median = median(ours_ms);
+      const double octomap_median = median(octomap_ms);
+      std::printf(
+          "pointcloud resolution=%g points=%zu ms_per_cloud=%.3f octomap_ms_per_cloud=%.3f "
+          "time_ratio=%.3f memory_ratio=%.3f threads=%d\n",
+          resolution, total_points / clouds.size(), ours_median, octomap_median,
+          ours_median / octomap_median,
+          static_cast<double>(ours.memory_bytes) / static_cast<double>(theirs.memory_bytes),
+          threads);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Subcommands
+
+struct Workload {
+  const char* name;
+  const char* usage;
+  std::set<std::string> value_options;
+  std::function<int(const CommandLine&)> run;
+};
+
+const std::vector<Workload>& workloads() {
+  static const std::vector<Workload> table{
+      {"pointcloud",
+       "[--resolution R[,R...]] [--points P[,P...]] [--clouds N] [--repetitions K] "
+       "[--max_range M]\n"
+       "      depth-camera clouds (P points each, N clouds orbiting the simulator's room) into\n"
+       "      our voxel map and into octomap::OcTree::insertPointCloud; ratios are ours / octomap",
+       {"resolution", "points", "clouds", "repetitions", "max_range"},
+       runPointCloud},
+  };
+  return table;
+}
+
+void printUsage(std::ostream& out) {
+  out << "usage: benchmark <workload> [options]\nworkloads:\n";
+  for (const Workload& workload : workloads()) {
+    out << "  " << workload.name << " " << workload.usage << "\n";
+  }
+}
+
+int runMain(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+    printUsage(argc < 2 ? std::cerr : std::cout);
+    return argc < 2 ? kUsageExitCode : 0;
+  }
+  const std::string name = argv[1];
+  for (const Workload& workload : workloads()) {
+    if (name != workload.name) continue;
+    try {
+      // The workload's name stands in for argv[0]: CommandLine skips it.
+      const CommandLine args(argc - 1, argv + 1, workload.value_options, {});
+      return workload.run(args);
+    } catch (const UsageError& error) {
+      std::cerr << "benchmark " << name << ": " << error.what() << "\n";
+      printUsage(std::cerr);
+      return kUsageExitCode;
+    }
+  }
+  std::cerr << "benchmark: unknown workload '" << name << "'\n";
+  printUsage(std::cerr);
+  return kUsageExitCode;
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
+
+int main(int argc, char** argv) {
+  try {
+    return occupancy_fusion::runMain(argc, argv);
+  } catch (const std::exception& error) {
+    std::cerr << "benchmark: " << error.what() << "\n";
+    return 1;
+  }
+}
