@@ -1,0 +1,171 @@
+// Depth-image occupancy mapping after Pirker et al. 2011, "Fast and Accurate Environment Modeling
+// using Three-Dimensional Occupancy Grids": an inverse sensor model per voxel of the camera
+// frustum, read from a pyramid of distance images and interpolated between pyramid layers.
+// Also the paper's two references: the ideal model (Eq. 8-9) and Andert's min-depth pyramid.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/sensors/depth_image.h"
+
+namespace occupancy_fusion {
+
+enum class DepthMethod {
+  kPyramid,  // the paper's: closest-to-t_i pyramid, bilinear (Eq. 15) and inter-layer (Eq. 17)
+  kAndert,   // baseline: min-depth pyramid, the one layer nearest the voxel's footprint, no
+             // interpolation
+  kIdeal,    // Eq. 8-9: every pixel ray through the voxel, weighted by its length inside it
+};
+std::string toString(DepthMethod method);
+DepthMethod depthMethodFromString(const std::string& name);  // "pyramid", "andert", "ideal"
+
+struct PyramidDepthConfig {
+  // Inverse sensor model, Eq. 7. Its peak is 0.5 + k / (sigma(d) sqrt(2 pi)), so p stays in
+  // (0, 1) only while k / (sigma sqrt(2 pi)) < 0.5.
+  double k = 0.6;      // importance factor
+  double sigma = 0.6;  // m, measurement uncertainty at distance 0
+  // Real depth cameras' noise grows about with the square of the distance:
+  // sigma(d) = sigma + sigma_quadratic * d^2, d the measured distance (Eq. 6). A larger sigma
+  // lowers and widens the peak, so validity at sigma guarantees validity at every distance.
+  double sigma_quadratic = 0.0;  // 1/m
+  double min_range = 0.1;        // m, voxels nearer to the camera centre are not updated
+  double max_range = 10.0;       // m, measured distances (Eq. 6) beyond it are invalid
+  // Space behind surfaces stays unknown: a voxel is updated only if it lies no farther than
+  // measured + unknown_behind_sigmas * sigma(measured) for at least one measurement it reads.
+  double unknown_behind_sigmas = 3.0;
+  int max_pyramid_levels = 12;  // cap on the number of layers M_0 ... M_{L-1}
+  DepthMethod method = DepthMethod::kPyramid;
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+// Eq. 7, for a voxel at distance z from the camera centre and a measured distance z_j.
+class DepthInverseModel {
+ public:
+  explicit DepthInverseModel(const PyramidDepthConfig& config);  // validates config
+
+  double sigmaAt(double measured) const { return sigma_ + sigma_quadratic_ * measured * measured; }
+  double probability(double distance, double measured) const;  // Eq. 7
+  float logOdds(double distance, double measured) const;       // log(p / (1 - p)) of Eq. 7
+  // False when the voxel lies too far behind the measurement to learn anything from it.
+  bool informs(double distance, double measured) const {
+    return distance <= measured + behind_sigmas_ * sigmaAt(measured);
+  }
+
+ private:
+  double k_;
+  double sigma_;
+  double sigma_quadratic_;
+  double behind_sigmas_;
+  float far_in_front_log_odds_;  // logit(0.3): Eq. 7 in front of the Gaussian's support
+};
+
+// Which measurement of a 2^i x 2^i block a pyramid layer keeps.
+enum class PyramidSelection {
+  kClosestToThreshold,  // Eq. 10: the one closest to t_i (Pirker)
+  kMinimum,             // the nearest obstacle (Andert)
+};
+
+// The distance image M (Eq. 6) and its layers M_i (Eq. 10-11), each built from M directly.
+// Layer i has ceil(width / 2^i) x ceil(height / 2^i) cells; cell (U, V) covers the pixels
+// U 2^i ... U 2^i + 2^i - 1 (and likewise in v). NaN marks a cell without valid measurement.
+class DistancePyramid {
+ public:
+  // t0 = focal length x resolution: at that distance a voxel projects onto one pixel.
+  DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera, double t0,
+                  int levels, double max_range, PyramidSelection selection);
+
+  // Layers needed for voxels down to min_range: until t_i <= min_range or one cell covers the
+  // image, at most max_levels.
+  static int levelCount(const CameraIntrinsics& camera, double t0, double min_range,
+                        int max_levels);
+
+  int levels() const { return static_cast<int>(layers_.size()); }
+  double threshold(int level) const;  // t_i = t0 / 2^i (Eq. 11)
+  int width(int level) const { return layers_[level].width; }
+  int height(int level) const { return layers_[level].height; }
+  float at(int level, int u, int v) const {
+    const Layer& layer = layers_[level];
+    return layer.cells[static_cast<std::size_t>(v) * layer.width + u];
+  }
+
+ private:
+  struct Layer {
+    int width = 0;
+    int height = 0;
+    std::vector<float> cells;
+  };
+  void buildLayer(int level, PyramidSelection selection);
+
+  double t0_;
+  std::vector<Layer> layers_;  // layers_[0] is M itself
+};
+
+// One depth image prepared for per-voxel queries at one map resolution.
+struct DepthFrame {
+  CameraIntrinsics camera;
+  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_camera_map = Eigen::Isometry3d::Identity();
+  double resolution = 0.0;
+  DistancePyramid pyramid;
+};
+
+struct DepthIntegrationStats {
+  std::size_t voxels_updated = 0;
+  std::size_t blocks_updated = 0;    // blocks holding at least one updated voxel
+  std::size_t candidate_blocks = 0;  // blocks examined (conservative frustum culling)
+  double milliseconds = 0.0;
+};
+
+class PyramidDepthIntegrator {
+ public:
+  explicit PyramidDepthIntegrator(const PyramidDepthConfig& config);  // validates config
+
+  const PyramidDepthConfig& config() const { return config_; }
+  const DepthInverseModel& model() const { return model_; }
+
+  // Eq. 6 and the pyramid the configured method reads (one layer for kIdeal).
+  DepthFrame prepare(const DepthImageView& depth, const CameraIntrinsics& camera,
+                     const Eigen::Isometry3d& T_map_camera, double resolution) const;
+
+  // The log-odds increment l(z) - l0 (Eq. 3, l0 = 0) the configured method gives the voxel of
+  // edge frame.resolution, axis-aligned in the map frame, centred at voxel_center (map frame);
+  // nullopt leaves the voxel unchanged. Used by integrate() and by accuracy evaluation.
+  std::optional<float> voxelLogOdds(const DepthFrame& frame,
+                                    const Eigen::Vector3d& voxel_center) const;
+
+  // Blocks that may hold a voxel the frame updates (a conservative superset).
+  std::vector<BlockIndex> candidateBlocks(const DepthFrame& frame) const;
+
+  // Integrates one image. depth: z-depth in metres (0 or NaN: invalid); T_map_camera: pose of
+  // the optical frame in the map frame. Voxels are computed in parallel per block, outside the
+  // map's lock, then written with VoxelMap::updateBlocks; only blocks with updates are
+  // allocated.
+  DepthIntegrationStats integrate(const DepthImageView& depth, const CameraIntrinsics& camera,
+                                  const Eigen::Isometry3d& T_map_camera, VoxelMap* map) const;
+
+ private:
+  struct LayerSample {
+    bool valid = false;    // at least one measurement with non-zero weight
+    bool informs = false;  // at least one of them informs the voxel
+    float log_odds = 0.0f;
+  };
+  LayerSample bilinearLogOdds(const DepthFrame& frame, int level, const Eigen::Vector2d& uv,
+                              double distance) const;  // Eq. 14-16
+  std::optional<float> pyramidLogOdds(const DepthFrame& frame, const Eigen::Vector2d& uv,
+                                      double distance) const;  // Eq. 12, 17
+  std::optional<float> andertLogOdds(const DepthFrame& frame, const Eigen::Vector2d& uv,
+                                     double distance) const;
+  std::optional<float> idealLogOdds(const DepthFrame& frame, const Eigen::Vector3d& voxel_center,
+                                    double distance) const;  // Eq. 8-9
+
+  PyramidDepthConfig config_;
+  DepthInverseModel model_;
+};
+
+}  // namespace occupancy_fusion

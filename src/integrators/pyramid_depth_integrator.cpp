@@ -1,0 +1,523 @@
+#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <tsl/robin_map.h>
+
+namespace occupancy_fusion {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+const double kSqrtTwoPi = std::sqrt(2.0 * M_PI);
+// Beyond this many sigmas the Gaussian of Eq. 7 is below 1e-13 of its peak: the log-odds equal
+// their limits to far better than float precision, so exp() and log() can be skipped.
+constexpr double kGaussianSupportSigmas = 8.0;
+
+void require(bool condition, const std::string& message) {
+  if (!condition) throw std::invalid_argument(message);
+}
+
+bool isValidMeasurement(float value) { return !std::isnan(value); }
+
+std::uint64_t packBlock(const BlockIndex& block) {
+  constexpr std::uint64_t kMask21 = (std::uint64_t{1} << 21) - 1;
+  auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & kMask21; };
+  return field(block.x()) | (field(block.y()) << 21) | (field(block.z()) << 42);
+}
+
+// Level i with t_{i+1} < distance <= t_i (Eq. 12 with the layers' distances decreasing in i);
+// -1 when the voxel lies beyond t_0.
+int bracketingLevel(const DistancePyramid& pyramid, double distance) {
+  if (distance > pyramid.threshold(0)) return -1;
+  int level = 0;
+  while (level + 1 < pyramid.levels() && distance <= pyramid.threshold(level + 1)) ++level;
+  return level;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Configuration and Eq. 7
+
+std::string toString(DepthMethod method) {
+  switch (method) {
+    case DepthMethod::kPyramid:
+      return "pyramid";
+    case DepthMethod::kAndert:
+      return "andert";
+    case DepthMethod::kIdeal:
+      return "ideal";
+  }
+  return "unknown";
+}
+
+DepthMethod depthMethodFromString(const std::string& name) {
+  if (name == "pyramid") return DepthMethod::kPyramid;
+  if (name == "andert") return DepthMethod::kAndert;
+  if (name == "ideal") return DepthMethod::kIdeal;
+  throw std::invalid_argument("PyramidDepthConfig.method must be pyramid, andert or ideal, not '" +
+                              name + "'");
+}
+
+void PyramidDepthConfig::validate() const {
+  require(std::isfinite(k) && k > 0.0, "PyramidDepthConfig.k must be finite and > 0");
+  require(std::isfinite(sigma) && sigma > 0.0, "PyramidDepthConfig.sigma must be finite and > 0");
+  // Eq. 7 peaks at 0.5 + k / (sigma sqrt(2 pi)) at z = z_j; its minimum, 0.3, is always valid.
+  require(k / (sigma * kSqrtTwoPi) < 0.5,
+          "PyramidDepthConfig.k and sigma: k / (sigma * sqrt(2 pi)) = " +
+              std::to_string(k / (sigma * kSqrtTwoPi)) +
+              " must be < 0.5, else Eq. 7 gives p >= 1 (raise sigma or lower k)");
+  require(std::isfinite(sigma_quadratic) && sigma_quadratic >= 0.0,
+          "PyramidDepthConfig.sigma_quadratic must be finite and >= 0");
+  require(std::isfinite(min_range) && min_range >= 0.0,
+          "PyramidDepthConfig.min_range must be finite and >= 0");
+  require(std::isfinite(max_range) && max_range > min_range,
+          "PyramidDepthConfig.max_range must be finite and > min_range");
+  require(std::isfinite(unknown_behind_sigmas) && unknown_behind_sigmas > 0.0,
+          "PyramidDepthConfig.unknown_behind_sigmas must be finite and > 0");
+  require(max_pyramid_levels >= 1 && max_pyramid_levels <= 24,
+          "PyramidDepthConfig.max_pyramid_levels must be in [1, 24]");
+}
+
+DepthInverseModel::DepthInverseModel(const PyramidDepthConfig& config)
+    : k_(config.k),
+      sigma_(config.sigma),
+      sigma_quadratic_(config.sigma_quadratic),
+      behind_sigmas_(config.unknown_behind_sigmas),
+      far_in_front_log_odds_(static_cast<float>(std::log(0.3 / 0.7))) {
+  config.validate();
+}
+
+double DepthInverseModel::probability(double distance, double measured) const {
+  const double sigma = sigmaAt(measured);
+  const double offset = (distance - measured) / sigma;
+  const double gaussian = std::exp(-0.5 * offset * offset);
+  const double amplitude = k_ / (sigma * kSqrtTwoPi);
+  if (distance <= measured) return 0.3 + (amplitude + 0.2) * gaussian;
+  return 0.5 + amplitude * gaussian;
+}
+
+float DepthInverseModel::logOdds(double distance, double measured) const {
+  const double offset = (distance - measured) / sigmaAt(measured);
+  if (offset < -kGaussianSupportSigmas) return far_in_front_log_odds_;
+  if (offset > kGaussianSupportSigmas) return 0.0f;
+  const double p = probability(distance, measured);
+  return static_cast<float>(std::log(p / (1.0 - p)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distance image and pyramid (Eq. 6, 10, 11)
+
+DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
+                                 double t0, int levels, double max_range,
+                                 PyramidSelection selection)
+    : t0_(t0), layers_(std::max(levels, 1)) {
+  camera.validate();
+  depth.validateAgainst(camera);
+  Layer& distances = layers_[0];
+  distances.width = camera.width;
+  distances.height = camera.height;
+  distances.cells.assign(static_cast<std::size_t>(camera.width) * camera.height, kNaN);
+#pragma omp parallel for schedule(static)
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const float z = depth.at(u, v);
+      if (!(z > 0.0f) || !std::isfinite(z)) continue;
+      const double measured = z * camera.pixelRay(u, v).norm();  // Eq. 6
+      if (measured > max_range) continue;
+      distances.cells[static_cast<std::size_t>(v) * camera.width + u] =
+          static_cast<float>(measured);
+    }
+  }
+  for (int level = 1; level < static_cast<int>(layers_.size()); ++level) {
+    buildLayer(level, selection);
+  }
+}
+
+int DistancePyramid::levelCount(const CameraIntrinsics& camera, double t0, double min_range,
+                                int max_levels) {
+  const int longest_side = std::max(camera.width, camera.height);
+  int levels = 1;
+  while (levels < max_levels && (1 << (levels - 1)) < longest_side &&
+         t0 / static_cast<double>(1 << (levels - 1)) > min_range) {
+    ++levels;
+  }
+  return levels;
+}
+
+double DistancePyramid::threshold(int level) const { return t0_ / static_cast<double>(1 << level); }
+
+void DistancePyramid::buildLayer(int level, PyramidSelection selection) {
+  // Eq. 10 reads the full-resolution M, not the layer below: the measurement closest to t_i
+  // need not have been kept for t_{i-1}.
+  const Layer& full = layers_[0];
+  Layer& layer = layers_[level];
+  const int side = 1 << level;
+  layer.width = (full.width + side - 1) / side;
+  layer.height = (full.height + side - 1) / side;
+  layer.cells.assign(static_cast<std::size_t>(layer.width) * layer.height, kNaN);
+  const float target = static_cast<float>(threshold(level));
+#pragma omp parallel for schedule(static)
+  for (int cell_v = 0; cell_v < layer.height; ++cell_v) {
+    for (int cell_u = 0; cell_u < layer.width; ++cell_u) {
+      float best = kNaN;
+      float best_score = std::numeric_limits<float>::infinity();
+      const int v_end = std::min(full.height, (cell_v + 1) * side);
+      const int u_end = std::min(full.width, (cell_u + 1) * side);
+      for (int v = cell_v * side; v < v_end; ++v) {
+        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+        for (int u = cell_u * side; u < u_end; ++u) {
+          const float value = row[u];
+          if (!isValidMeasurement(value)) continue;
+          const float score =
+              selection == PyramidSelection::kMinimum ? value : std::abs(value - target);
+          if (score < best_score) {
+            best_score = score;
+            best = value;
+          }
+        }
+      }
+      layer.cells[static_cast<std::size_t>(cell_v) * layer.width + cell_u] = best;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Per-voxel log-odds
+
+PyramidDepthIntegrator::PyramidDepthIntegrator(const PyramidDepthConfig& config)
+    : config_(config), model_(config) {}
+
+DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
+                                           const CameraIntrinsics& camera,
+                                           const Eigen::Isometry3d& T_map_camera,
+                                           double resolution) const {
+  require(std::isfinite(resolution) && resolution > 0.0, "resolution must be finite and > 0");
+  const double t0 = std::max(camera.fx, camera.fy) * resolution;  // Eq. 11's t_0
+  const int levels =
+      config_.method == DepthMethod::kIdeal
+          ? 1
+          : DistancePyramid::levelCount(camera, t0, config_.min_range, config_.max_pyramid_levels);
+  const PyramidSelection selection = config_.method == DepthMethod::kAndert
+                                         ? PyramidSelection::kMinimum
+                                         : PyramidSelection::kClosestToThreshold;
+  return DepthFrame{camera, T_map_camera, T_map_camera.inverse(), resolution,
+                    DistancePyramid(depth, camera, t0, levels, config_.max_range, selection)};
+}
+
+std::optional<float> PyramidDepthIntegrator::voxelLogOdds(
+    const DepthFrame& frame, const Eigen::Vector3d& voxel_center) const {
+  const Eigen::Vector3d point = frame.T_camera_map * voxel_center;
+  const double distance = point.norm();
+  if (distance < config_.min_range) return std::nullopt;
+  if (config_.method == DepthMethod::kIdeal) return idealLogOdds(frame, voxel_center, distance);
+  if (point.z() <= 0.0) return std::nullopt;
+  const Eigen::Vector2d uv = frame.camera.project(point);  // Eq. 13
+  if (!(uv.x() >= -0.5 && uv.x() < frame.camera.width - 0.5 && uv.y() >= -0.5 &&
+        uv.y() < frame.camera.height - 0.5)) {
+    return std::nullopt;
+  }
+  if (config_.method == DepthMethod::kAndert) return andertLogOdds(frame, uv, distance);
+  return pyramidLogOdds(frame, uv, distance);
+}
+
+PyramidDepthIntegrator::LayerSample PyramidDepthIntegrator::bilinearLogOdds(
+    const DepthFrame& frame, int level, const Eigen::Vector2d& uv, double distance) const {
+  // Eq. 14 with pixel centres at integer coordinates: cell U of layer i is centred on pixel
+  // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5.
+  const double scale = 1.0 / static_cast<double>(1 << level);
+  const double u = (uv.x() + 0.5) * scale - 0.5;
+  const double v = (uv.y() + 0.5) * scale - 0.5;
+  const int u0 = static_cast<int>(std::floor(u));
+  const int v0 = static_cast<int>(std::floor(v));
+  const double fu = u - u0;  // <u> of Eq. 16
+  const double fv = v - v0;
+  const int width = frame.pyramid.width(level);
+  const int height = frame.pyramid.height(level);
+  LayerSample sample;
+  double weighted = 0.0;
+  double weight_sum = 0.0;
+  for (int dv = 0; dv <= 1; ++dv) {
+    for (int du = 0; du <= 1; ++du) {
+      const double weight = (du ? fu : 1.0 - fu) * (dv ? fv : 1.0 - fv);  // Eq. 15
+      const int cu = u0 + du;
+      const int cv = v0 + dv;
+      if (weight <= 0.0 || cu < 0 || cv < 0 || cu >= width || cv >= height) continue;
+      const float measured = frame.pyramid.at(level, cu, cv);
+      // Invalid pixels contribute nothing: Eq. 15 is renormalised over the valid neighbours.
+      if (!isValidMeasurement(measured)) continue;
+      weighted += weight * model_.logOdds(distance, measured);
+      weight_sum += weight;
+      sample.informs = sample.informs || model_.informs(distance, measured);
+    }
+  }
+  if (weight_sum <= 0.0) return sample;
+  sample.valid = true;
+  sample.log_odds = static_cast<float>(weighted / weight_sum);
+  return sample;
+}
+
+std::optional<float> PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame,
+                                                            const Eigen::Vector2d& uv,
+                                                            double distance) const {
+  const DistancePyramid& pyramid = frame.pyramid;
+  const int level = bracketingLevel(pyramid, distance);
+  // Beyond t_0, or nearer than the last layer's t: one layer alone.
+  if (level < 0 || level + 1 >= pyramid.levels()) {
+    const LayerSample only = bilinearLogOdds(frame, std::max(level, 0), uv, distance);
+    if (!only.valid || !only.informs) return std::nullopt;
+    return only.log_odds;
+  }
+  const LayerSample fine = bilinearLogOdds(frame, level, uv, distance);
+  const LayerSample coarse = bilinearLogOdds(frame, level + 1, uv, distance);
+  if (!(fine.informs || coarse.informs)) return std::nullopt;
+  if (!fine.valid) return coarse.log_odds;
+  if (!coarse.valid) return fine.log_odds;
+  const double t_fine = pyramid.threshold(level);
+  const double t_coarse = pyramid.threshold(level + 1);
+  // Eq. 17: l^i at z = t_i, l^{i+1} at z = t_{i+1}, linear in between.
+  return static_cast<float>(fine.log_odds + (distance - t_fine) *
+                                                (coarse.log_odds - fine.log_odds) /
+                                                (t_coarse - t_fine));
+}
+
+std::optional<float> PyramidDepthIntegrator::andertLogOdds(const DepthFrame& frame,
+                                                           const Eigen::Vector2d& uv,
+                                                           double distance) const {
+  // The layer whose cells best match the voxel's footprint of t_0 / z pixels, nearest cell.
+  const DistancePyramid& pyramid = frame.pyramid;
+  const double footprint_log2 = std::log2(pyramid.threshold(0) / distance);
+  const int level =
+      std::clamp(static_cast<int>(std::lround(footprint_log2)), 0, pyramid.levels() - 1);
+  const double scale = 1.0 / static_cast<double>(1 << level);
+  const int cu =
+      std::min(static_cast<int>(std::floor((uv.x() + 0.5) * scale)), pyramid.width(level) - 1);
+  const int cv =
+      std::min(static_cast<int>(std::floor((uv.y() + 0.5) * scale)), pyramid.height(level) - 1);
+  const float measured = pyramid.at(level, std::max(cu, 0), std::max(cv, 0));
+  if (!isValidMeasurement(measured) || !model_.informs(distance, measured)) return std::nullopt;
+  return model_.logOdds(distance, measured);
+}
+
+std::optional<float> PyramidDepthIntegrator::idealLogOdds(const DepthFrame& frame,
+                                                          const Eigen::Vector3d& voxel_center,
+                                                          double distance) const {
+  const CameraIntrinsics& camera = frame.camera;
+  const double half = 0.5 * frame.resolution;
+  const Eigen::Vector3d lo = voxel_center.array() - half;
+  const Eigen::Vector3d hi = voxel_center.array() + half;
+  // Pixels whose centre rays can cross the voxel: the bounding box of its corners' projections.
+  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min;
+  double v_min = u_min, v_max = -u_min;
+  bool behind_camera = false;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p(corner & 1 ? hi.x() : lo.x(), corner & 2 ? hi.y() : lo.y(),
+                            corner & 4 ? hi.z() : lo.z());
+    const Eigen::Vector3d q = frame.T_camera_map * p;
+    if (q.z() <= 1e-9) {
+      behind_camera = true;
+      break;
+    }
+    const Eigen::Vector2d uv = camera.project(q);
+    u_min = std::min(u_min, uv.x());
+    u_max = std::max(u_max, uv.x());
+    v_min = std::min(v_min, uv.y());
+    v_max = std::max(v_max, uv.y());
+  }
+  const int u_first = behind_camera ? 0 : std::max(0, static_cast<int>(std::ceil(u_min)));
+  const int u_last =
+      behind_camera ? camera.width - 1 : std::min(camera.width - 1, int(std::floor(u_max)));
+  const int v_first = behind_camera ? 0 : std::max(0, static_cast<int>(std::ceil(v_min)));
+  const int v_last =
+      behind_camera ? camera.height - 1 : std::min(camera.height - 1, int(std::floor(v_max)));
+
+  const Eigen::Vector3d origin = frame.T_map_camera.translation();
+  const Eigen::Matrix3d rotation = frame.T_map_camera.linear();
+  double weighted = 0.0;
+  double eta = 0.0;  // Eq. 9
+  bool informs = false;
+  for (int v = v_first; v <= v_last; ++v) {
+    for (int u = u_first; u <= u_last; ++u) {
+      const float measured = frame.pyramid.at(0, u, v);
+      if (!isValidMeasurement(measured)) continue;
+      // Length of the (unbounded, infinitely thin) pixel ray inside the voxel: slab test.
+      const Eigen::Vector3d direction = (rotation * camera.pixelRay(u, v)).normalized();
+      double enter = 0.0;
+      double exit = std::numeric_limits<double>::infinity();
+      for (int axis = 0; axis < 3; ++axis) {
+        if (direction[axis] == 0.0) {
+          if (origin[axis] < lo[axis] || origin[axis] > hi[axis]) exit = -1.0;
+          continue;
+        }
+        double t1 = (lo[axis] - origin[axis]) / direction[axis];
+        double t2 = (hi[axis] - origin[axis]) / direction[axis];
+        if (t1 > t2) std::swap(t1, t2);
+        enter = std::max(enter, t1);
+        exit = std::min(exit, t2);
+      }
+      const double length = exit - enter;
+      if (!(length > 0.0)) continue;
+      weighted += length * model_.logOdds(distance, measured);  // Eq. 8
+      eta += length;
+      informs = informs || model_.informs(distance, measured);
+    }
+  }
+  if (eta <= 0.0 || !informs) return std::nullopt;
+  return static_cast<float>(weighted / eta);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Integration over blocks
+
+std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame& frame) const {
+  const CameraIntrinsics& camera = frame.camera;
+  const DistancePyramid& pyramid = frame.pyramid;
+  // Farthest distance each 8 x 8 tile of pixels can inform (measurement + unknown margin).
+  constexpr int kTile = 8;
+  const int tiles_u = (camera.width + kTile - 1) / kTile;
+  const int tiles_v = (camera.height + kTile - 1) / kTile;
+  std::vector<float> reach(static_cast<std::size_t>(tiles_u) * tiles_v, -1.0f);
+  float max_reach = -1.0f;
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const float measured = pyramid.at(0, u, v);
+      if (!isValidMeasurement(measured)) continue;
+      const float limit =
+          static_cast<float>(measured + config_.unknown_behind_sigmas * model_.sigmaAt(measured));
+      float& tile = reach[static_cast<std::size_t>(v / kTile) * tiles_u + u / kTile];
+      tile = std::max(tile, limit);
+      max_reach = std::max(max_reach, limit);
+    }
+  }
+  if (max_reach <= config_.min_range) return {};
+
+  // Axis-aligned box of the frustum truncated at z = max_reach (distance >= z-depth).
+  Eigen::AlignedBox3d box;
+  box.extend(frame.T_map_camera.translation());
+  for (double u : {-0.5, camera.width - 0.5}) {
+    for (double v : {-0.5, camera.height - 0.5}) {
+      box.extend(frame.T_map_camera * (camera.pixelRay(u, v) * max_reach));
+    }
+  }
+  const double block_size = VoxelBlock::kSide * frame.resolution;
+  const Eigen::Vector3i first = (box.min() / block_size).array().floor().cast<int>();
+  const Eigen::Vector3i last = (box.max() / block_size).array().floor().cast<int>();
+  const double radius = 0.5 * std::sqrt(3.0) * block_size;
+  const double t0 = pyramid.threshold(0);
+
+  auto accepts = [&](const BlockIndex& block) {
+    const Eigen::Vector3d center = (block.cast<double>().array() + 0.5) * block_size;
+    const Eigen::Vector3d p = frame.T_camera_map * center;
+    const double distance = p.norm();
+    if (p.z() + radius <= 0.0 || distance + radius < config_.min_range) return false;
+    const double near = std::max(distance - radius, 1e-6);
+    if (near > max_reach) return false;
+    // Conservative pixel box of the block's bounding sphere, widened by the support of the
+    // coarsest pyramid cell its voxels may read (Eq. 15 reads two cells of 2^i pixels).
+    double u_lo = -0.5, u_hi = camera.width - 0.5, v_lo = -0.5, v_hi = camera.height - 0.5;
+    if (p.z() - radius > 1e-6) {
+      const double z_near = p.z() - radius, z_far = p.z() + radius;
+      u_lo = camera.fx * std::min((p.x() - radius) / z_near, (p.x() - radius) / z_far) + camera.cx;
+      u_hi = camera.fx * std::max((p.x() + radius) / z_near, (p.x() + radius) / z_far) + camera.cx;
+      v_lo = camera.fy * std::min((p.y() - radius) / z_near, (p.y() - radius) / z_far) + camera.cy;
+      v_hi = camera.fy * std::max((p.y() + radius) / z_near, (p.y() + radius) / z_far) + camera.cy;
+      if (u_hi < -0.5 || u_lo > camera.width - 0.5 || v_hi < -0.5 || v_lo > camera.height - 0.5) {
+        return false;
+      }
+      const int coarsest =
+          std::clamp(static_cast<int>(std::floor(std::log2(std::max(t0 / near, 1.0)))) + 1, 0,
+                     pyramid.levels() - 1);
+      const double margin = 2.0 * (1 << coarsest) + 1.0;
+      u_lo -= margin, u_hi += margin, v_lo -= margin, v_hi += margin;
+    }
+    const int tu0 = std::max(0, static_cast<int>(std::floor(u_lo + 0.5)) / kTile);
+    const int tu1 = std::min(tiles_u - 1, static_cast<int>(std::max(0.0, u_hi + 0.5)) / kTile);
+    const int tv0 = std::max(0, static_cast<int>(std::floor(v_lo + 0.5)) / kTile);
+    const int tv1 = std::min(tiles_v - 1, static_cast<int>(std::max(0.0, v_hi + 0.5)) / kTile);
+    for (int tv = tv0; tv <= tv1; ++tv) {
+      for (int tu = tu0; tu <= tu1; ++tu) {
+        if (reach[static_cast<std::size_t>(tv) * tiles_u + tu] >= near) return true;
+      }
+    }
+    return false;
+  };
+
+  std::vector<BlockIndex> blocks;
+#pragma omp parallel
+  {
+    std::vector<BlockIndex> mine;
+#pragma omp for collapse(2) schedule(dynamic, 4) nowait
+    for (int z = first.z(); z <= last.z(); ++z) {
+      for (int y = first.y(); y <= last.y(); ++y) {
+        for (int x = first.x(); x <= last.x(); ++x) {
+          const BlockIndex block(x, y, z);
+          if (accepts(block)) mine.push_back(block);
+        }
+      }
+    }
+#pragma omp critical
+    blocks.insert(blocks.end(), mine.begin(), mine.end());
+  }
+  return blocks;
+}
+
+DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& depth,
+                                                        const CameraIntrinsics& camera,
+                                                        const Eigen::Isometry3d& T_map_camera,
+                                                        VoxelMap* map) const {
+  require(map != nullptr, "PyramidDepthIntegrator::integrate: map is null");
+  const auto start = std::chrono::steady_clock::now();
+  const DepthFrame frame = prepare(depth, camera, T_map_camera, map->resolution());
+  const std::vector<BlockIndex> candidates = candidateBlocks(frame);
+
+  // Compute every voxel's increment outside the map's lock (NaN: no update).
+  const int count = static_cast<int>(candidates.size());
+  std::vector<float> deltas(static_cast<std::size_t>(count) * VoxelBlock::kVolume, kNaN);
+  std::vector<int> updated(count, 0);
+#pragma omp parallel for schedule(dynamic, 8)
+  for (int i = 0; i < count; ++i) {
+    float* block_deltas = &deltas[static_cast<std::size_t>(i) * VoxelBlock::kVolume];
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      const Eigen::Vector3d center = map->centerOf(VoxelMap::voxelIndex(candidates[i], linear));
+      const std::optional<float> delta = voxelLogOdds(frame, center);
+      if (!delta) continue;
+      block_deltas[linear] = *delta;
+      ++updated[i];
+    }
+  }
+
+  DepthIntegrationStats stats;
+  stats.candidate_blocks = candidates.size();
+  std::vector<BlockIndex> touched;
+  tsl::robin_map<std::uint64_t, int> slot_of;
+  for (int i = 0; i < count; ++i) {
+    if (updated[i] == 0) continue;
+    touched.push_back(candidates[i]);
+    slot_of[packBlock(candidates[i])] = i;
+    stats.voxels_updated += updated[i];
+  }
+  stats.blocks_updated = touched.size();
+  map->setFocus(T_map_camera.translation());
+  const float min_log_odds = map->minLogOdds();
+  const float max_log_odds = map->maxLogOdds();
+  // Eq. 3 with l_0 = 0, clamped like OctoMap.
+  map->updateBlocks(touched, [&](const BlockIndex& index, VoxelBlock& block) {
+    const float* block_deltas =
+        &deltas[static_cast<std::size_t>(slot_of.at(packBlock(index))) * VoxelBlock::kVolume];
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      if (!std::isnan(block_deltas[linear])) {
+        block.update(linear, block_deltas[linear], min_log_odds, max_log_odds);
+      }
+    }
+  });
+  stats.milliseconds =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+}  // namespace occupancy_fusion
