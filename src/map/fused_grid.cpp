@@ -80,10 +80,7 @@ unsigned bandMask(const VoxelMap& map, int block_z, const FusedGridConfig& confi
 }
 
 // Sparse column states keyed by column index, for the reference.
-struct ColumnKeyHash {
-  std::size_t operator()(std::uint64_t key) const { return std::hash<std::uint64_t>()(key); }
-};
-using ColumnStates = tsl::robin_map<std::uint64_t, std::int8_t, ColumnKeyHash>;
+using ColumnStates = tsl::robin_map<std::uint64_t, std::int8_t, FusedGridView::KeyHash>;
 
 void raiseState(ColumnStates* states, int x, int y, std::int8_t state) {
   auto [it, inserted] = states->try_emplace(packColumnTile(x, y), state);
@@ -115,6 +112,17 @@ OccupancyRaster rasterFromStates(const ColumnStates& states, double resolution) 
 }
 
 }  // namespace
+
+std::size_t FusedGridView::KeyHash::operator()(std::uint64_t key) const {
+  // splitmix64 finaliser: std::hash is the identity, and packed keys differ mostly in high bits
+  // while the table masks low bits.
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ULL;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebULL;
+  key ^= key >> 31;
+  return static_cast<std::size_t>(key);
+}
 
 void FusedGridConfig::validate() const {
   if (std::isnan(min_z)) throw std::invalid_argument("occupancy_min_z must be a number");
@@ -188,7 +196,7 @@ void FusedGridView::updateFromMap(const VoxelMap& map) {
     rebuildFromMap(map);
     return;
   }
-  tsl::robin_set<std::uint64_t> seen;
+  tsl::robin_set<std::uint64_t, KeyHash> seen;
   for (const auto* list : {&changes.changed, &changes.removed}) {
     for (const BlockIndex& block : *list) {
       if (seen.insert(packBlock(block)).second) refreshBlock(map, block);
@@ -277,7 +285,7 @@ void FusedGridView::updateFromLayer(const GridLayer2D* layer) {
     stats_.layer_rebuilt = true;
     layer->forEachTile([&](const TileIndex& tile, const GridTile&) { tiles.push_back(tile); });
   } else {
-    tsl::robin_set<std::uint64_t> seen;
+    tsl::robin_set<std::uint64_t, KeyHash> seen;
     for (const TileIndex& tile : changes.changed) {
       if (seen.insert(packColumnTile(tile.x(), tile.y())).second) tiles.push_back(tile);
     }

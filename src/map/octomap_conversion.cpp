@@ -30,6 +30,18 @@ std::uint64_t blockKey(const BlockIndex& block) {
          static_cast<std::uint64_t>(block.z() & 0x1fffff);
 }
 
+// splitmix64 finaliser: std::hash is the identity, and the table masks the low (z) bits.
+struct BlockKeyHash {
+  std::size_t operator()(std::uint64_t key) const {
+    key ^= key >> 30;
+    key *= 0xbf58476d1ce4e5b9ULL;
+    key ^= key >> 27;
+    key *= 0x94d049bb133111ebULL;
+    key ^= key >> 31;
+    return static_cast<std::size_t>(key);
+  }
+};
+
 // Voxel writes grouped per block, so the import allocates and fills each block once.
 struct BlockWrites {
   std::vector<std::pair<int, float>> values;  // (linear index in block, log-odds)
@@ -78,7 +90,7 @@ void fromOcTree(const octomap::OcTree& tree, VoxelMap* map) {
         " m) differs from the map's (" + std::to_string(resolution) + " m)");
   }
   const int max_depth = static_cast<int>(tree.getTreeDepth());
-  tsl::robin_map<std::uint64_t, BlockWrites> writes;
+  tsl::robin_map<std::uint64_t, BlockWrites, BlockKeyHash> writes;
   std::vector<BlockIndex> blocks;
   auto add_voxel = [&](const VoxelIndex& index, float log_odds) {
     const BlockIndex block = VoxelMap::blockOf(index);

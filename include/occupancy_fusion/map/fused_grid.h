@@ -82,6 +82,11 @@ class FusedGridView {
   };
   const UpdateStats& lastUpdateStats() const { return stats_; }
 
+  // Hash of packed 64-bit tile and block keys.
+  struct KeyHash {
+    std::size_t operator()(std::uint64_t key) const;
+  };
+
  private:
   static constexpr int kSide = VoxelBlock::kSide;
   static constexpr int kArea = kSide * kSide;
@@ -97,8 +102,8 @@ class FusedGridView {
     std::array<std::uint8_t, kArea> occupied{};
     std::array<std::uint8_t, kArea> free{};
   };
-  using TileTable = tsl::robin_map<std::uint64_t, ColumnTile>;
-  using ShareTable = tsl::robin_map<std::uint64_t, BlockShare>;
+  using TileTable = tsl::robin_map<std::uint64_t, ColumnTile, KeyHash>;
+  using ShareTable = tsl::robin_map<std::uint64_t, BlockShare, KeyHash>;
 
   void updateFromMap(const VoxelMap& map);
   void rebuildFromMap(const VoxelMap& map);
