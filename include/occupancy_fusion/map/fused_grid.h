@@ -71,7 +71,9 @@ class FusedGridView {
 
   // layer may be null (no 2D layer). Returns the fused raster over everything known.
   OccupancyRaster update(const VoxelMap& map, const GridLayer2D* layer);
-  void reset();  // forget all state: the next update() rebuilds from scratch
+  // Forget all state: the next update() rebuilds from scratch. Maps and layers are recognised by
+  // address, so call this when one is destroyed and another may take its place.
+  void reset();
 
   // What the last update() did, for tests and diagnostics.
   struct UpdateStats {
