@@ -43,8 +43,27 @@ class Scene {
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
 
  private:
+  // A box prepared for castRay: its rotation inverted once, a bounding sphere to skip rays that
+  // cannot hit it, and a flag for the common axis-aligned case.
+  struct RayBox {
+    Eigen::Matrix3d R_box_world;
+    Eigen::Vector3d center;
+    Eigen::Vector3d half_extents;
+    double bound_radius;
+    bool axis_aligned;
+  };
+  struct RayCylinder {
+    Cylinder cylinder;
+    double bound_radius;
+  };
+
   std::vector<Primitive> primitives_;
   Eigen::AlignedBox3d bounds_;
+  // Typed copies for castRay's inner loop: no variant dispatch, inlined intersections.
+  std::vector<RayBox> boxes_;
+  std::vector<RayCylinder> cylinders_;
+  std::vector<Sphere> spheres_;
+  std::vector<Plane> planes_;
 };
 
 }  // namespace sim

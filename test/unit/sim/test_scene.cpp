@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scene.h"
@@ -30,6 +32,35 @@ TEST(SceneTest, CastRayTakesNearestHitWithinRange) {
   ASSERT_TRUE(t);
   EXPECT_DOUBLE_EQ(*t, 3.0);
   EXPECT_FALSE(scene.castRay({0, 0, 0}, {0, 1, 0}, 100.0));
+}
+
+// castRay's prepared fast path must agree with each primitive's own intersect().
+TEST(SceneTest, CastRayAgreesWithPerPrimitiveIntersection) {
+  Scene scene = makeBoxScene();
+  scene.add(Box::yawed({3, -3, 3}, {0.5, 2, 1}, 0.7)).add(Plane{{0, 0, 7}, {0, 0.6, -0.8}});
+  std::uint64_t state = 12345;
+  auto uniform = [&state]() {  // small LCG: the test needs no statistical quality
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  int hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d origin(-1 + 11 * uniform(), -5.4 + 10.8 * uniform(), 8 * uniform());
+    const Eigen::Vector3d dir =
+        Eigen::Vector3d(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalized();
+    double expected = std::numeric_limits<double>::infinity();
+    for (const Primitive& primitive : scene.primitives()) {
+      const auto t = std::visit([&](const auto& p) { return p.intersect(origin, dir); }, primitive);
+      if (t) expected = std::min(expected, *t);
+    }
+    const auto t = scene.castRay(origin, dir, 100.0);
+    ASSERT_EQ(t.has_value(), std::isfinite(expected)) << i;
+    if (t) {
+      EXPECT_NEAR(*t, expected, 1e-9) << i;
+      ++hits;
+    }
+  }
+  EXPECT_GT(hits, 19000);
 }
 
 TEST(SceneTest, OccupancyAndDistance) {
