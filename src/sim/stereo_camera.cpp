@@ -50,6 +50,16 @@ std::vector<float> patchOffsets(const DisparityNoise& noise, int width, int heig
   return offsets;
 }
 
+// True when a surface nearer than `point` blocks the right camera's view of it. The tolerance
+// absorbs the float rounding of the depth image the point was made from.
+bool hiddenFromRightCamera(const Scene& scene, const Eigen::Vector3d& right_center,
+                           const Eigen::Vector3d& point) {
+  const Eigen::Vector3d to_point = point - right_center;
+  const double distance = to_point.norm();
+  const std::optional<double> t = scene.castRay(right_center, to_point / distance, distance);
+  return t && *t < distance * (1.0 - 1e-5) - 1e-6;
+}
+
 }  // namespace
 
 void DisparityNoise::validate() const {
@@ -115,12 +125,18 @@ DisparityImage renderDisparity(const Scene& scene, const PinholeCamera& camera, 
   image.disparity.assign(depth.depth.size(), kInvalid);
   const double fb = camera.fx * baseline;
   const auto frame = static_cast<std::uint64_t>(frame_index);
-#pragma omp parallel for schedule(static)
+  const Eigen::Vector3d right_center = T_world_camera * Eigen::Vector3d(baseline, 0, 0);
+#pragma omp parallel for schedule(dynamic, 4)
   for (int v = 0; v < image.height; ++v) {
     for (int u = 0; u < image.width; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * image.width + u;
       const float z = depth.depth[i];
       if (!std::isfinite(z)) continue;
+      if (noise.left_right_check &&
+          hiddenFromRightCamera(scene, right_center,
+                                T_world_camera * (z * camera.pixelRay(u, v)))) {
+        continue;
+      }
       double d = fb / z + offsets[i];
       if (noise.sigma_px > 0) {
         d += noise.sigma_px * standardNormal(hashKey({noise.seed, kWhiteStream, frame, i}));

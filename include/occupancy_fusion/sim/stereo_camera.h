@@ -27,6 +27,9 @@ struct DisparityNoise {
   double patch_offset_px = 4.0;       // px, magnitude of the shift inside a patch
   int patch_persistence_frames = 10;  // frames that share one patch layout
   std::uint64_t seed = 1;
+  // Invalidate pixels whose surface point the right camera cannot see (occluded by a nearer
+  // surface), as a matcher's left-right consistency check does.
+  bool left_right_check = false;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -64,9 +67,9 @@ std::vector<DisparityPatch> disparityPatches(const DisparityNoise& noise, int wi
 
 // Renders the disparity of the left camera of a rectified pair whose left optical frame is
 // T_world_camera and whose right camera sits `baseline` metres along the left camera's +x.
-// max_range (m) limits the true z-depth as in renderDepth. Occlusions between the two views are
-// not modelled: a pixel is valid where the left camera sees a surface. Deterministic given
-// noise.seed and frame_index.
+// max_range (m) limits the true z-depth as in renderDepth. A pixel is valid where the left camera
+// sees a surface and, with noise.left_right_check, the right camera sees the same point.
+// Deterministic given noise.seed and frame_index.
 DisparityImage renderDisparity(const Scene& scene, const PinholeCamera& camera, double baseline,
                                const Eigen::Isometry3d& T_world_camera, double max_range,
                                const DisparityNoise& noise = DisparityNoise(), int frame_index = 0);

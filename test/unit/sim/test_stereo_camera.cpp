@@ -194,6 +194,39 @@ TEST(StereoCameraTest, ShiftBelowZeroDisparityIsInvalid) {
   EXPECT_EQ(checked, 20u * 15u);  // probability 1: one patch per cell
 }
 
+TEST(StereoCameraTest, LeftRightCheckInvalidatesPixelsTheRightCameraCannotSee) {
+  // Wall at x = 5 behind a thin post at x in [2, 2.2], |y| <= 0.1. The right camera sits 0.5 m
+  // along optical +x, i.e. at world y = -0.5. Its segment to the wall point (5, y) crosses the
+  // post for y in about [0.5, 0.86]: at x = 2 it is at -0.5 + 0.4 (y + 0.5).
+  Scene scene;
+  scene.add(Box::axisAligned({5, -20, -20}, {6, 20, 20}))
+      .add(Box::axisAligned({2, -0.1, -20}, {2.2, 0.1, 20}));
+  const PinholeCamera camera = camera160();
+  DisparityNoise noise;
+  noise.left_right_check = true;
+  const DisparityImage checked = renderDisparity(scene, camera, 0.5, kPose, 50.0, noise);
+  const DisparityImage unchecked = renderDisparity(scene, camera, 0.5, kPose, 50.0);
+  // Pixel column of wall point y (optical x = -y): u = cx - fx y / 5 = 79.5 - 40 y.
+  const int v = 60;
+  const int occluded_u = 51;  // y = 0.7125
+  const int visible_u = 19;   // y = 1.5125: right ray at x = 2.2 is at y = 0.37, clear of the post
+  EXPECT_TRUE(std::isnan(checked.at(occluded_u, v)));
+  EXPECT_NEAR(unchecked.at(occluded_u, v), 200.0 * 0.5 / 5.0, 1e-4);
+  EXPECT_NEAR(checked.at(visible_u, v), 200.0 * 0.5 / 5.0, 1e-4);
+  EXPECT_NEAR(checked.at(80, v), 200.0 * 0.5 / 2.0, 1e-4);  // the post itself
+  // Exactly the wall columns whose right-camera segment meets the post are invalid.
+  for (int u = 0; u < camera.width; ++u) {
+    const double y = -(u - camera.cx) / camera.fx * 5.0;
+    if (std::abs(y) <= 0.1 * 5.0 / 2.2 + 0.03) continue;  // post or its silhouette edge
+    const double y_at_front = -0.5 + 0.4 * (y + 0.5);
+    const double y_at_back = -0.5 + 0.44 * (y + 0.5);
+    const bool blocked =
+        std::max(y_at_front, y_at_back) >= -0.1 && std::min(y_at_front, y_at_back) <= 0.1;
+    if (std::abs(y_at_front - 0.1) < 0.02 || std::abs(y_at_back + 0.1) < 0.02) continue;  // edge
+    EXPECT_EQ(std::isnan(checked.at(u, v)), blocked) << u;
+  }
+}
+
 TEST(StereoCameraTest, ValidateNamesTheBadField) {
   DisparityNoise noise;
   noise.patch_persistence_frames = 0;
