@@ -14,6 +14,8 @@ namespace sim {
 
 using Primitive = std::variant<Box, Sphere, Plane, Cylinder>;
 
+// Built once with add(), then only read: const member functions may run concurrently (the
+// renderers call castRay from OpenMP threads).
 class Scene {
  public:
   // Adds a primitive after validating it (throws std::invalid_argument naming the bad field).
