@@ -141,9 +141,10 @@ IntegrationStats PointCloudIntegrator::computeUpdate(
   {
     const int thread = omp_get_thread_num();
     VoxelUpdateSet* local = thread == 0 ? update : &partial[thread - 1];
-    // Contiguous chunks keep neighbouring rays (image order) on one thread, so the sets of
-    // different threads overlap little.
-#pragma omp for schedule(static)
+    // Chunks of neighbouring rays (image order) keep the sets of different threads apart;
+    // handing them out dynamically keeps both threads busy when rays differ in length or a
+    // core is taken by another process.
+#pragma omp for schedule(dynamic, 512)
     for (int i = 0; i < count; ++i) {
       const Eigen::Vector3d point = points_in_map[i].cast<double>();
       if (!isRepresentable(point, resolution)) {
