@@ -1,0 +1,164 @@
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <ros/time.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include "occupancy_fusion/sim/trajectory.h"
+#include "occupancy_fusion/tools/ros_conversions.h"
+#include "occupancy_fusion/tools/rosbag_reader.h"
+#include "occupancy_fusion/tools/simulated_recording.h"
+
+namespace occupancy_fusion {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(RosConversions, CloudRoundTripDropsNonFinitePoints) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<Eigen::Vector3f> points = {
+      {1.0f, 2.0f, 3.0f}, {nan, 0.0f, 1.0f}, {-4.5f, 0.25f, 1e3f}};
+  const sensor_msgs::PointCloud2 cloud = cloudFromPoints(points, "camera", ros::Time(12.5));
+  EXPECT_EQ(cloud.header.frame_id, "camera");
+  EXPECT_DOUBLE_EQ(cloud.header.stamp.toSec(), 12.5);
+  EXPECT_EQ(cloud.width * cloud.height, 3u);
+  EXPECT_FALSE(cloud.is_dense);
+  const std::vector<Eigen::Vector3f> back = pointsFromCloud(cloud);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[0], points[0]);
+  EXPECT_EQ(back[1], points[2]);
+}
+
+TEST(RosConversions, ReadsDoublePrecisionCloudsAndRejectsOthers) {
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header.frame_id = "lidar";
+  sensor_msgs::PointCloud2Modifier modifier(cloud);
+  modifier.setPointCloud2Fields(3, "x", 1, sensor_msgs::PointField::FLOAT64, "y", 1,
+                                sensor_msgs::PointField::FLOAT64, "z", 1,
+                                sensor_msgs::PointField::FLOAT64);
+  modifier.resize(1);
+  sensor_msgs::PointCloud2Iterator<double> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  *x = 0.5, *y = -1.5, *z = 2.25;
+  const std::vector<Eigen::Vector3f> points = pointsFromCloud(cloud);
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_EQ(points[0], Eigen::Vector3f(0.5f, -1.5f, 2.25f));
+
+  sensor_msgs::PointCloud2 no_z;
+  no_z.header.frame_id = "lidar";
+  sensor_msgs::PointCloud2Modifier(no_z).setPointCloud2Fields(
+      2, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32);
+  try {
+    pointsFromCloud(no_z);
+    FAIL() << "a cloud without z was accepted";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("'lidar'"), std::string::npos);
+  }
+}
+
+class SimulatedBagTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    ros::Time::init();
+    std::string pattern = (fs::temp_directory_path() / "rosbag_reader_test_XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+    config_.scene = "room";
+    config_.frames = 4;
+    config_.rate_hz = 2.0;
+    std::vector<std::unique_ptr<SimulatedSensor>> sensors;
+    sensors.push_back(std::make_unique<PointCloudCameraSensor>(camera_));
+    writeSimulatedRecording(config_, sensors, (dir_ / "room.bag").string());
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static fs::path dir_;
+  static SimulatedRecordingConfig config_;
+  static PointCloudCameraConfig camera_;
+};
+
+fs::path SimulatedBagTest::dir_;
+SimulatedRecordingConfig SimulatedBagTest::config_;
+PointCloudCameraConfig SimulatedBagTest::camera_;
+
+struct CollectingConsumer : FrameConsumer {
+  void onPointCloud(const PointCloudFrame& frame) override { clouds.push_back(frame); }
+  void onUnreadable(const FrameHeader&, const std::string& why) override { errors.push_back(why); }
+  std::vector<PointCloudFrame> clouds;
+  std::vector<std::string> errors;
+};
+
+TEST_F(SimulatedBagTest, ReaderDeliversEveryCloudInTimeOrder) {
+  RosbagReader reader((dir_ / "room.bag").string(), {});
+  EXPECT_EQ(reader.cloudTopics(), std::vector<std::string>{"/cloud_in"});
+  EXPECT_EQ(reader.frameCount(), 4u);
+  CollectingConsumer consumer;
+  std::vector<std::size_t> progress;
+  reader.read(&consumer, [&](std::size_t done) { progress.push_back(done); });
+  EXPECT_EQ(progress, (std::vector<std::size_t>{1, 2, 3, 4}));
+  ASSERT_EQ(consumer.clouds.size(), 4u);
+  EXPECT_TRUE(consumer.errors.empty());
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(consumer.clouds[k].header.frame_id, "camera_optical_frame");
+    EXPECT_EQ(consumer.clouds[k].header.source, "/cloud_in");
+    EXPECT_NEAR(consumer.clouds[k].header.stamp, config_.start_time + k / config_.rate_hz, 1e-6);
+    EXPECT_GT(consumer.clouds[k].points.size(), 1000u);  // the camera always sees walls
+  }
+}
+
+TEST_F(SimulatedBagTest, TfChainGivesTheSimulatedCameraPose) {
+  RosbagReader reader((dir_ / "room.bag").string(), {"/cloud_in"});
+  const SimulatedWorld world = makeSimulatedWorld("room", config_.frames);
+  for (int k = 0; k < config_.frames; ++k) {
+    const Eigen::Isometry3d expected =
+        world.T_map_base[k] * camera_.T_base_link * sim::opticalFrameInBody();
+    std::string why;
+    const std::optional<Eigen::Isometry3d> pose = reader.poses().lookup(
+        "map", "camera_optical_frame", config_.start_time + k / config_.rate_hz, &why);
+    ASSERT_TRUE(pose) << why;
+    EXPECT_TRUE(pose->matrix().isApprox(expected.matrix(), 1e-9)) << "frame " << k;
+  }
+  std::string why;
+  EXPECT_FALSE(reader.poses().lookup("map", "nowhere", config_.start_time, &why));
+  EXPECT_NE(why.find("nowhere"), std::string::npos) << why;
+  // After the last pose: tf2 does not extrapolate.
+  EXPECT_FALSE(
+      reader.poses().lookup("map", "camera_optical_frame", config_.start_time + 100, &why));
+}
+
+TEST_F(SimulatedBagTest, PointsTransformedWithTheTfPoseLieOnTheScene) {
+  RosbagReader reader((dir_ / "room.bag").string(), {});
+  CollectingConsumer consumer;
+  reader.read(&consumer, nullptr);
+  const sim::Scene scene = makeSimulatedWorld("room", 1).scene;
+  const PointCloudFrame& frame = consumer.clouds.at(2);
+  std::string why;
+  const std::optional<Eigen::Isometry3d> pose =
+      reader.poses().lookup("map", frame.header.frame_id, frame.header.stamp, &why);
+  ASSERT_TRUE(pose) << why;
+  for (const Eigen::Vector3f& point : frame.points) {
+    ASSERT_LT(scene.distanceToSurface(*pose * point.cast<double>()), 1e-4);
+  }
+}
+
+TEST_F(SimulatedBagTest, ReaderRejectsMissingTopicsAndFiles) {
+  EXPECT_THROW(RosbagReader((dir_ / "room.bag").string(), {"/tf"}), std::invalid_argument);
+  EXPECT_THROW(RosbagReader((dir_ / "absent.bag").string(), {}), std::invalid_argument);
+}
+
+TEST(SimulatedWorld, KnowsItsScenesAndRejectsOthers) {
+  for (const std::string& name : simulatedSceneNames()) {
+    EXPECT_EQ(makeSimulatedWorld(name, 5).T_map_base.size(), 5u) << name;
+  }
+  EXPECT_THROW(makeSimulatedWorld("attic", 5), std::invalid_argument);
+  EXPECT_THROW(makeSimulatedWorld("room", 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
