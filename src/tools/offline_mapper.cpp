@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -32,8 +33,10 @@ log-odds behind the 2D view) and .png (a picture of the 2D view).
 Poses come from the bag's /tf and /tf_static; a cloud whose transform to frame_id is not
 available is skipped and counted.
 
-  --config FILE        YAML parameters, as loaded by rosparam into a mapper nodelet
-  --namespace NS       take the parameters from section NS of the file (e.g. a node name)
+  --config FILE        YAML parameters, as loaded by rosparam into a mapper nodelet; repeat
+                       to merge several files as successive rosparam loads (later ones win),
+                       e.g. point_cloud_mapper.yaml, then map_server.yaml for the 2D band
+  --namespace NS       take the parameters from section NS of each file (e.g. a node name)
   --set KEY=VALUE      override one parameter, e.g. --set sensor_model/max_range=4 (repeatable)
   --bag FILE           input rosbag
   --cloud-topic TOPIC  sensor_msgs/PointCloud2 topic to map (repeatable; default: all of them)
@@ -45,7 +48,7 @@ Exit status: 0 done, 2 bad arguments, parameters or input files, 1 failure while
 )";
 
 struct Options {
-  std::string config_path;
+  std::vector<std::string> config_paths;
   std::string config_namespace;
   std::vector<std::string> overrides;
   std::string bag_path;
@@ -57,7 +60,8 @@ struct Options {
 
 Options parseOptions(const CommandLine& line) {
   Options options;
-  options.config_path = line.required("config");
+  line.required("config");
+  options.config_paths = line.values("config");
   options.config_namespace = line.value("namespace");
   options.overrides = line.values("set");
   options.bag_path = line.required("bag");
@@ -68,7 +72,9 @@ Options parseOptions(const CommandLine& line) {
   if (options.name.empty() || options.name.find('/') != std::string::npos) {
     throw UsageError("--name must be a plain file name, got '" + options.name + "'");
   }
-  for (const std::string& path : {options.config_path, options.bag_path}) {
+  std::vector<std::string> inputs = options.config_paths;
+  inputs.push_back(options.bag_path);
+  for (const std::string& path : inputs) {
     if (!std::filesystem::is_regular_file(path)) throw UsageError("no such file: " + path);
   }
   return options;
@@ -125,7 +131,20 @@ void printSummary(const InputReader& reader, const RecordingMapper& mapper,
        << " occupied, resolution " << std::setprecision(3) << mapper.map().resolution() << " m, "
        << std::setprecision(1) << mapper.map().memoryBytes() / (1024.0 * 1024.0)
        << " MiB map memory, " << peakResidentMebibytes() << " MiB peak resident\n";
-  text << "  2D view: " << outputs.grid_width << " x " << outputs.grid_height << " cells\n";
+  if (outputs.grid_width == 0) {
+    text << "  2D view: none, nothing was mapped (no .pgm, .yaml, .npy, .png)\n";
+  } else {
+    text << "  2D view: " << outputs.grid_width << " x " << outputs.grid_height << " cells";
+    const FusedGridConfig& band = mapper.config().fused_grid;
+    if (std::isinf(band.min_z) && std::isinf(band.max_z)) {
+      text << " (occupancy_min_z/occupancy_max_z unset: every height is projected, floor too)";
+    }
+    text << "\n";
+  }
+  if (outputs.octomap_skipped_voxels > 0) {
+    text << "  warning: " << outputs.octomap_skipped_voxels
+         << " voxels lie outside OctoMap's key range and are not in the .bt/.ot\n";
+  }
   text << "  wrote:";
   for (const std::string& path : outputs.files) text << " " << path;
   std::cout << text.str() << "\n";
@@ -147,7 +166,7 @@ Setup prepare(int argc, char** argv) {
   setup.options = parseOptions(line);
   try {
     setup.parameters = std::make_unique<YamlParameterSource>(
-        YamlParameterSource::fromFile(setup.options.config_path, setup.options.config_namespace));
+        YamlParameterSource::fromFiles(setup.options.config_paths, setup.options.config_namespace));
     for (const std::string& assignment : setup.options.overrides) {
       setup.parameters->addOverride(assignment);
     }

@@ -23,6 +23,10 @@ class YamlParameterSource : public ParameterSource {
                                         const std::string& section = "");
   // As fromString, for a file; the message names the file.
   static YamlParameterSource fromFile(const std::string& path, const std::string& section = "");
+  // Several files read as successive `rosparam load`s into one namespace: maps are merged key by
+  // key, and a later file's value replaces an earlier one's. Throws as fromFile, and for none.
+  static YamlParameterSource fromFiles(const std::vector<std::string>& paths,
+                                       const std::string& section = "");
 
   // Adds an override from "key=value" (as given to --set); it wins over the file. The value is
   // parsed as the type asked for at get() time. Throws std::invalid_argument without '=' or key.

@@ -50,6 +50,19 @@ void collectLeafKeys(const YAML::Node& node, const std::string& prefix,
   }
 }
 
+// overlay laid over base: maps merge key by key, anything else replaces. Works on clones, so
+// neither input changes (yaml-cpp nodes share their data).
+YAML::Node merged(const YAML::Node& base, const YAML::Node& overlay) {
+  if (!base.IsMap() || !overlay.IsMap()) return YAML::Clone(overlay);
+  YAML::Node result = YAML::Clone(base);
+  for (const auto& entry : overlay) {
+    const std::string key = entry.first.as<std::string>();
+    const YAML::Node existing = base[key];  // const lookup: inserts nothing
+    result[key] = existing.IsDefined() ? merged(existing, entry.second) : YAML::Clone(entry.second);
+  }
+  return result;
+}
+
 std::invalid_argument wrongType(const std::string& key, const std::string& origin,
                                 const char* type_name, const YAML::Node& node) {
   std::string shown = node.IsScalar() ? "'" + node.Scalar() + "'" : "a non-scalar value";
@@ -91,6 +104,14 @@ YamlParameterSource YamlParameterSource::fromFile(const std::string& path,
   } catch (const std::invalid_argument& error) {
     throw std::invalid_argument("parameter file '" + path + "': " + error.what());
   }
+}
+
+YamlParameterSource YamlParameterSource::fromFiles(const std::vector<std::string>& paths,
+                                                   const std::string& section) {
+  if (paths.empty()) throw std::invalid_argument("no parameter file given");
+  YAML::Node root(YAML::NodeType::Map);
+  for (const std::string& path : paths) root.reset(merged(root, fromFile(path, section).root_));
+  return YamlParameterSource(root);
 }
 
 void YamlParameterSource::addOverride(const std::string& assignment) {

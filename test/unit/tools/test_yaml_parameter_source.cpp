@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -9,6 +14,8 @@
 
 namespace occupancy_fusion {
 namespace {
+
+namespace fs = std::filesystem;
 
 // The layout rosparam load puts under a nodelet's private namespace.
 const char* const kConfig = R"(
@@ -168,6 +175,26 @@ TEST(YamlParameterSource, RejectsBadFilesWithTheirName) {
   EXPECT_THROW(YamlParameterSource::fromString("- 1\n- 2\n"), std::invalid_argument);
   double value = 3.0;
   EXPECT_FALSE(YamlParameterSource::fromString("").get("resolution", &value));  // empty file
+}
+
+TEST(YamlParameterSource, MergesFilesLikeSuccessiveRosparamLoads) {
+  const fs::path dir = fs::temp_directory_path() / ("yaml_merge_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "first.yaml") << "resolution: 0.1\nsensor_model: {hit: 0.7, miss: 0.4}\n";
+  std::ofstream(dir / "second.yaml") << "sensor_model: {miss: 0.3}\noccupancy_max_z: 2.0\n";
+  const YamlParameterSource source = YamlParameterSource::fromFiles(
+      {(dir / "first.yaml").string(), (dir / "second.yaml").string()});
+  double resolution = 0.0, hit = 0.0, miss = 0.0, max_z = 0.0;
+  EXPECT_TRUE(source.get("resolution", &resolution));
+  EXPECT_TRUE(source.get("sensor_model/hit", &hit));
+  EXPECT_TRUE(source.get("sensor_model/miss", &miss));
+  EXPECT_TRUE(source.get("occupancy_max_z", &max_z));
+  EXPECT_DOUBLE_EQ(resolution, 0.1);
+  EXPECT_DOUBLE_EQ(hit, 0.7);   // kept from the first file
+  EXPECT_DOUBLE_EQ(miss, 0.3);  // replaced by the second
+  EXPECT_DOUBLE_EQ(max_z, 2.0);
+  EXPECT_THROW(YamlParameterSource::fromFiles({}), std::invalid_argument);
+  fs::remove_all(dir);
 }
 
 TEST(CommandLine, ParsesValuesFlagsAndRepeats) {
