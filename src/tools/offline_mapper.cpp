@@ -44,7 +44,8 @@ available is skipped and counted.
   --name NAME          base name of the map files (default: map)
   --quiet              no progress lines
   --help               this text
-Exit status: 0 done, 2 bad arguments, parameters or input files, 1 failure while mapping.
+Exit status: 0 done, 2 bad arguments, parameters or input files, 1 failure while mapping
+(including a recording none of whose frames could be placed).
 )";
 
 struct Options {
@@ -115,6 +116,7 @@ void printSummary(const InputReader& reader, const RecordingMapper& mapper,
   std::ostringstream text;
   text << std::fixed << std::setprecision(1);
   text << "offline_mapper: summary\n  input: " << reader.description() << "\n  frames:";
+  if (stats.frames_by_kind.empty()) text << " 0";
   for (const auto& [kind, count] : stats.frames_by_kind) text << " " << count << " " << kind;
   text << " integrated, " << stats.framesSkipped() << " skipped\n";
   for (const auto& [reason, count] : stats.skipped_by_reason) {
@@ -199,6 +201,10 @@ int run(int argc, char** argv) {
   for (const std::string& key : setup.parameters->unreadOverrides()) {
     std::cerr << "offline_mapper: warning: --set " << key
               << " was not read by anything (misspelt?)\n";
+  }
+  if (mapper.statistics().framesIntegrated() == 0) {
+    std::cerr << "offline_mapper: failed: no frame could be integrated (see the skip reasons)\n";
+    return 1;
   }
   return 0;
 }

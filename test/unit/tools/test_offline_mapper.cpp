@@ -302,6 +302,21 @@ TEST_F(OfflineMapperTest, SkipsAndCountsCloudsWithoutTransform) {
   EXPECT_TRUE(fs::is_regular_file(dir_ / "skip" / "map.bt"));
 }
 
+TEST_F(OfflineMapperTest, FailsWhenNoFrameCanBePlaced) {
+  const RunResult result = runTool(
+      OFFLINE_MAPPER_PATH,
+      "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + (dir_ / "room.bag").string() +
+          "' --output-dir '" + (dir_ / "none").string() + "' --quiet --set frame_id=nowhere",
+      dir_);
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_NE(result.out.find("frames: 0 integrated, " + std::to_string(kFrames) + " skipped"),
+            std::string::npos)
+      << result.out;
+  EXPECT_NE(result.out.find("no transform from 'camera_optical_frame' to 'nowhere'"),
+            std::string::npos)
+      << result.out;
+}
+
 TEST_F(OfflineMapperTest, BadArgumentsExitWithTwoAndSayWhy) {
   const std::string config = " --config '" + (dir_ / "mapper.yaml").string() + "'";
   const std::string bag = " --bag '" + (dir_ / "room.bag").string() + "'";
@@ -344,6 +359,13 @@ TEST(SimulateRecording, WritesABagAndRejectsBadArguments) {
     EXPECT_EQ(bad.exit_code, 2) << arguments;
     EXPECT_NE(bad.err.find("error:"), std::string::npos) << arguments;
   }
+  // Deterministic: the same options give the same bag, byte for byte.
+  const std::string same = "--scene room --frames 2 --output '";
+  ASSERT_EQ(runTool(SIMULATE_RECORDING_PATH, same + (dir / "a.bag").string() + "'", dir).exit_code,
+            0);
+  ASSERT_EQ(runTool(SIMULATE_RECORDING_PATH, same + (dir / "b.bag").string() + "'", dir).exit_code,
+            0);
+  EXPECT_EQ(readText(dir / "a.bag"), readText(dir / "b.bag"));
   const RunResult unknown_scene =
       runTool(SIMULATE_RECORDING_PATH, "--scene nowhere --output x.bag", dir);
   EXPECT_NE(unknown_scene.err.find("room"), std::string::npos);  // lists the known scenes
