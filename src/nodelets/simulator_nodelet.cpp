@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <nodelet/nodelet.h>
+#include <std_srvs/SetBool.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -88,6 +89,7 @@ class Simulator : public nodelet::Nodelet {
     }
     start_ = ros::Time::now();
     publishStaticTransforms();
+    pause_service_ = getPrivateNodeHandle().advertiseService("pause", &Simulator::onPause, this);
     ros::NodeHandle& node_handle = getNodeHandle();
     tf_timer_ = node_handle.createTimer(
         ros::Duration(1.0 / tf_rate_),
@@ -98,6 +100,7 @@ class Simulator : public nodelet::Nodelet {
           ros::Duration(1.0 / raw->rate()), [this, raw](const ros::TimerEvent&) {
             // The body pose at exactly the data's stamp goes out first, so tf2 message filters
             // downstream release the data without waiting for the next TF tick.
+            if (paused_) return;
             const ros::Time stamp = ros::Time::now();
             publishBodyPose(stamp);
             raw->publish(scene_, bodyPoseAt(stamp), stamp);
@@ -119,8 +122,23 @@ class Simulator : public nodelet::Nodelet {
         getNodeHandle(), readSimulatedDepthCameraConfig(parameters, "camera/")));
   }
 
+  // The robot stands still while paused: path time excludes the paused intervals.
   Eigen::Isometry3d bodyPoseAt(const ros::Time& stamp) const {
-    return path_.bodyPoseAt((stamp - start_).toSec());
+    const ros::Time path_clock = paused_ ? pause_start_ : stamp;
+    return path_.bodyPoseAt((path_clock - start_ - paused_total_).toSec());
+  }
+
+  // ~pause (std_srvs/SetBool): true stops the robot and the sensor data (TF keeps flowing), false
+  // resumes. Lets a test or a demo freeze the map while it inspects it.
+  bool onPause(std_srvs::SetBool::Request& request, std_srvs::SetBool::Response& response) {
+    const ros::Time now = ros::Time::now();
+    if (request.data && !paused_) pause_start_ = now;
+    if (!request.data && paused_) paused_total_ += now - pause_start_;
+    paused_ = request.data;
+    response.success = true;
+    response.message = paused_ ? "paused" : "running";
+    NODELET_INFO("simulation %s", response.message.c_str());
+    return true;
   }
 
   void publishStaticTransforms() {
@@ -153,6 +171,10 @@ class Simulator : public nodelet::Nodelet {
 
   ros::Time start_;
   ros::Time last_body_stamp_;
+  bool paused_ = false;
+  ros::Time pause_start_;
+  ros::Duration paused_total_;
+  ros::ServiceServer pause_service_;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   ros::Timer tf_timer_;
