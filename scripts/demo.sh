@@ -13,7 +13,8 @@ mkdir -p "$out"
 echo "[demo] simulating a recording: $out/room.bag"
 "$bin/simulate_recording" --scene room --frames 60 --rate 5 --output "$out/room.bag"
 echo "[demo] mapping it"
-"$bin/offline_mapper" --config "$root/config/point_cloud_mapper.yaml" --bag "$out/room.bag" \
+"$bin/offline_mapper" --config "$root/config/point_cloud_mapper.yaml" \
+  --config "$root/config/map_server.yaml" --bag "$out/room.bag" \
   --output-dir "$out" --name room
 echo "[demo] results in $out:"
 ls -1 "$out"
