@@ -102,6 +102,29 @@ double DepthInverseModel::probability(double distance, double measured) const {
   return 0.5 + amplitude * gaussian;
 }
 
+std::optional<double> DepthInverseModel::logOddsAtOffset(double offset) const {
+  if (sigma_quadratic_ != 0.0) return std::nullopt;
+  if (offset < -kGaussianSupportSigmas) return far_in_front_log_odds_;
+  if (offset > kGaussianSupportSigmas) return 0.0;
+  const double gaussian = std::exp(-0.5 * offset * offset);
+  const double amplitude = k_ / (sigma_ * kSqrtTwoPi);
+  const double p = offset <= 0.0 ? 0.3 + (amplitude + 0.2) * gaussian : 0.5 + amplitude * gaussian;
+  return std::log(p / (1.0 - p));
+}
+
+double DepthInverseModel::supportSigmas() { return kGaussianSupportSigmas; }
+
+OffsetLogOddsTable::OffsetLogOddsTable(const DepthInverseModel& model)
+    : limit_(DepthInverseModel::supportSigmas()), far_in_front_(model.farInFrontLogOdds()) {
+  if (!model.logOddsAtOffset(0.0)) return;
+  const auto samples = static_cast<std::size_t>(2.0 * limit_ * kSamplesPerSigma) + 1;
+  values_.resize(samples);
+  for (std::size_t i = 0; i < samples; ++i) {
+    values_[i] = static_cast<float>(
+        *model.logOddsAtOffset(static_cast<double>(i) / kSamplesPerSigma - limit_));
+  }
+}
+
 float DepthInverseModel::logOdds(double distance, double measured) const {
   const double offset = (distance - measured) / sigmaAt(measured);
   if (offset < -kGaussianSupportSigmas) return far_in_front_log_odds_;
@@ -191,7 +214,7 @@ void DistancePyramid::buildLayer(int level, PyramidSelection selection) {
 // Per-voxel log-odds
 
 PyramidDepthIntegrator::PyramidDepthIntegrator(const PyramidDepthConfig& config)
-    : config_(config), model_(config) {}
+    : config_(config), model_(config), table_(model_), inverse_sigma_(1.0 / config.sigma) {}
 
 DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
                                            const CameraIntrinsics& camera,
@@ -213,10 +236,18 @@ DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
 std::optional<float> PyramidDepthIntegrator::voxelLogOdds(
     const DepthFrame& frame, const Eigen::Vector3d& voxel_center) const {
   const Eigen::Vector3d point = frame.T_camera_map * voxel_center;
+  if (config_.method == DepthMethod::kIdeal) {
+    const double distance = point.norm();
+    if (distance < config_.min_range) return std::nullopt;
+    return idealLogOdds(frame, voxel_center, distance);
+  }
+  return projectedLogOdds(frame, point);
+}
+
+std::optional<float> PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
+                                                              const Eigen::Vector3d& point) const {
   const double distance = point.norm();
-  if (distance < config_.min_range) return std::nullopt;
-  if (config_.method == DepthMethod::kIdeal) return idealLogOdds(frame, voxel_center, distance);
-  if (point.z() <= 0.0) return std::nullopt;
+  if (distance < config_.min_range || point.z() <= 0.0) return std::nullopt;
   const Eigen::Vector2d uv = frame.camera.project(point);  // Eq. 13
   if (!(uv.x() >= -0.5 && uv.x() < frame.camera.width - 0.5 && uv.y() >= -0.5 &&
         uv.y() < frame.camera.height - 0.5)) {
@@ -251,7 +282,7 @@ PyramidDepthIntegrator::LayerSample PyramidDepthIntegrator::bilinearLogOdds(
       const float measured = frame.pyramid.at(level, cu, cv);
       // Invalid pixels contribute nothing: Eq. 15 is renormalised over the valid neighbours.
       if (!isValidMeasurement(measured)) continue;
-      weighted += weight * model_.logOdds(distance, measured);
+      weighted += weight * cellLogOdds(distance, measured);
       weight_sum += weight;
       sample.informs = sample.informs || model_.informs(distance, measured);
     }
@@ -301,7 +332,7 @@ std::optional<float> PyramidDepthIntegrator::andertLogOdds(const DepthFrame& fra
       std::min(static_cast<int>(std::floor((uv.y() + 0.5) * scale)), pyramid.height(level) - 1);
   const float measured = pyramid.at(level, std::max(cu, 0), std::max(cv, 0));
   if (!isValidMeasurement(measured) || !model_.informs(distance, measured)) return std::nullopt;
-  return model_.logOdds(distance, measured);
+  return cellLogOdds(distance, measured);
 }
 
 std::optional<float> PyramidDepthIntegrator::idealLogOdds(const DepthFrame& frame,
@@ -375,25 +406,48 @@ std::optional<float> PyramidDepthIntegrator::idealLogOdds(const DepthFrame& fram
 // Integration over blocks
 
 std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame& frame) const {
+  std::vector<BlockIndex> blocks;
+  for (const CandidateBlock& block : cullBlocks(frame)) blocks.push_back(block.index);
+  return blocks;
+}
+
+std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cullBlocks(
+    const DepthFrame& frame) const {
   const CameraIntrinsics& camera = frame.camera;
   const DistancePyramid& pyramid = frame.pyramid;
-  // Farthest distance each 8 x 8 tile of pixels can inform (measurement + unknown margin).
+  // Per 8 x 8 tile of pixels: the farthest distance it can inform (measurement + unknown
+  // margin), the nearest distance where Eq. 7 departs from its constant in front of the
+  // Gaussian, and whether every pixel is valid.
   constexpr int kTile = 8;
   const int tiles_u = (camera.width + kTile - 1) / kTile;
   const int tiles_v = (camera.height + kTile - 1) / kTile;
-  std::vector<float> reach(static_cast<std::size_t>(tiles_u) * tiles_v, -1.0f);
-  float max_reach = -1.0f;
-  for (int v = 0; v < camera.height; ++v) {
-    for (int u = 0; u < camera.width; ++u) {
-      const float measured = pyramid.at(0, u, v);
-      if (!isValidMeasurement(measured)) continue;
-      const float limit =
-          static_cast<float>(measured + config_.unknown_behind_sigmas * model_.sigmaAt(measured));
-      float& tile = reach[static_cast<std::size_t>(v / kTile) * tiles_u + u / kTile];
-      tile = std::max(tile, limit);
-      max_reach = std::max(max_reach, limit);
+  const std::size_t tile_count = static_cast<std::size_t>(tiles_u) * tiles_v;
+  std::vector<float> reach(tile_count, -1.0f);
+  std::vector<float> front(tile_count, std::numeric_limits<float>::infinity());
+  std::vector<char> all_valid(tile_count, 1);
+  // Slightly nearer than Eq. 7's support, so rounding cannot claim a voxel it would not give.
+  constexpr double kFrontSafety = 1e-6;  // m
+#pragma omp parallel for schedule(static)
+  for (int tv = 0; tv < tiles_v; ++tv) {
+    const int v_end = std::min(camera.height, (tv + 1) * kTile);
+    for (int v = tv * kTile; v < v_end; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + u / kTile;
+        const float measured = pyramid.at(0, u, v);
+        if (!isValidMeasurement(measured)) {
+          all_valid[tile] = 0;
+          continue;
+        }
+        const double sigma = model_.sigmaAt(measured);
+        reach[tile] = std::max(
+            reach[tile], static_cast<float>(measured + config_.unknown_behind_sigmas * sigma));
+        front[tile] = std::min(
+            front[tile], static_cast<float>(measured - DepthInverseModel::supportSigmas() * sigma -
+                                            kFrontSafety));
+      }
     }
   }
+  const float max_reach = *std::max_element(reach.begin(), reach.end());
   if (max_reach <= config_.min_range) return {};
 
   // Axis-aligned box of the frustum truncated at z = max_reach (distance >= z-depth).
@@ -410,13 +464,14 @@ std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame
   const double radius = 0.5 * std::sqrt(3.0) * block_size;
   const double t0 = pyramid.threshold(0);
 
-  auto accepts = [&](const BlockIndex& block) {
+  // nullopt: the block gets nothing; else whether it lies wholly in front of Eq. 7's support.
+  auto classify = [&](const BlockIndex& block) -> std::optional<bool> {
     const Eigen::Vector3d center = (block.cast<double>().array() + 0.5) * block_size;
     const Eigen::Vector3d p = frame.T_camera_map * center;
     const double distance = p.norm();
-    if (p.z() + radius <= 0.0 || distance + radius < config_.min_range) return false;
+    if (p.z() + radius <= 0.0 || distance + radius < config_.min_range) return std::nullopt;
     const double near = std::max(distance - radius, 1e-6);
-    if (near > max_reach) return false;
+    if (near > max_reach) return std::nullopt;
     // Conservative pixel box of the block's bounding sphere, widened by the support of the
     // coarsest pyramid cell its voxels may read (Eq. 15 reads two cells of 2^i pixels).
     double u_lo = -0.5, u_hi = camera.width - 0.5, v_lo = -0.5, v_hi = camera.height - 0.5;
@@ -427,7 +482,7 @@ std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame
       v_lo = camera.fy * std::min((p.y() - radius) / z_near, (p.y() - radius) / z_far) + camera.cy;
       v_hi = camera.fy * std::max((p.y() + radius) / z_near, (p.y() + radius) / z_far) + camera.cy;
       if (u_hi < -0.5 || u_lo > camera.width - 0.5 || v_hi < -0.5 || v_lo > camera.height - 0.5) {
-        return false;
+        return std::nullopt;
       }
       const int coarsest =
           std::clamp(static_cast<int>(std::floor(std::log2(std::max(t0 / near, 1.0)))) + 1, 0,
@@ -439,24 +494,33 @@ std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame
     const int tu1 = std::min(tiles_u - 1, static_cast<int>(std::max(0.0, u_hi + 0.5)) / kTile);
     const int tv0 = std::max(0, static_cast<int>(std::floor(v_lo + 0.5)) / kTile);
     const int tv1 = std::min(tiles_v - 1, static_cast<int>(std::max(0.0, v_hi + 0.5)) / kTile);
+    float footprint_reach = -1.0f;
+    float footprint_front = std::numeric_limits<float>::infinity();
+    bool footprint_valid = true;
     for (int tv = tv0; tv <= tv1; ++tv) {
       for (int tu = tu0; tu <= tu1; ++tu) {
-        if (reach[static_cast<std::size_t>(tv) * tiles_u + tu] >= near) return true;
+        const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + tu;
+        footprint_reach = std::max(footprint_reach, reach[tile]);
+        footprint_front = std::min(footprint_front, front[tile]);
+        footprint_valid = footprint_valid && all_valid[tile];
       }
     }
-    return false;
+    if (footprint_reach < near) return std::nullopt;
+    return footprint_valid && distance + radius < footprint_front;
   };
 
-  std::vector<BlockIndex> blocks;
+  std::vector<CandidateBlock> blocks;
 #pragma omp parallel
   {
-    std::vector<BlockIndex> mine;
+    std::vector<CandidateBlock> mine;
 #pragma omp for collapse(2) schedule(dynamic, 4) nowait
     for (int z = first.z(); z <= last.z(); ++z) {
       for (int y = first.y(); y <= last.y(); ++y) {
         for (int x = first.x(); x <= last.x(); ++x) {
           const BlockIndex block(x, y, z);
-          if (accepts(block)) mine.push_back(block);
+          if (const std::optional<bool> far_in_front = classify(block)) {
+            mine.push_back({block, *far_in_front});
+          }
         }
       }
     }
@@ -466,6 +530,48 @@ std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame
   return blocks;
 }
 
+int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,
+                                         const VoxelMap& map, float* deltas) const {
+  int count = 0;
+  if (config_.method == DepthMethod::kIdeal) {
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      const std::optional<float> delta =
+          voxelLogOdds(frame, map.centerOf(VoxelMap::voxelIndex(block.index, linear)));
+      if (!delta) continue;
+      deltas[linear] = *delta;
+      ++count;
+    }
+    return count;
+  }
+  // The same arithmetic as voxelLogOdds (centerOf, then the transform), so both give
+  // bit-identical results: Andert's scheme is discontinuous at cell borders.
+  const VoxelIndex first = VoxelMap::voxelIndex(block.index, 0);
+  const CameraIntrinsics& camera = frame.camera;
+  for (int z = 0; z < VoxelBlock::kSide; ++z) {
+    for (int y = 0; y < VoxelBlock::kSide; ++y) {
+      for (int x = 0; x < VoxelBlock::kSide; ++x) {
+        const Eigen::Vector3d point =
+            frame.T_camera_map * map.centerOf(first + VoxelIndex(x, y, z));
+        std::optional<float> delta;
+        if (!block.far_in_front) {
+          delta = projectedLogOdds(frame, point);
+        } else if (point.z() > 0.0 && point.norm() >= config_.min_range) {
+          // The same tests as projectedLogOdds; every cell read gives Eq. 7's constant.
+          const Eigen::Vector2d uv = camera.project(point);
+          if (uv.x() >= -0.5 && uv.x() < camera.width - 0.5 && uv.y() >= -0.5 &&
+              uv.y() < camera.height - 0.5) {
+            delta = model_.farInFrontLogOdds();
+          }
+        }
+        if (!delta) continue;
+        deltas[VoxelBlock::linearIndex(x, y, z)] = *delta;
+        ++count;
+      }
+    }
+  }
+  return count;
+}
+
 DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& depth,
                                                         const CameraIntrinsics& camera,
                                                         const Eigen::Isometry3d& T_map_camera,
@@ -473,7 +579,7 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   require(map != nullptr, "PyramidDepthIntegrator::integrate: map is null");
   const auto start = std::chrono::steady_clock::now();
   const DepthFrame frame = prepare(depth, camera, T_map_camera, map->resolution());
-  const std::vector<BlockIndex> candidates = candidateBlocks(frame);
+  const std::vector<CandidateBlock> candidates = cullBlocks(frame);
 
   // Compute every voxel's increment outside the map's lock (NaN: no update).
   const int count = static_cast<int>(candidates.size());
@@ -481,14 +587,8 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   std::vector<int> updated(count, 0);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int i = 0; i < count; ++i) {
-    float* block_deltas = &deltas[static_cast<std::size_t>(i) * VoxelBlock::kVolume];
-    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
-      const Eigen::Vector3d center = map->centerOf(VoxelMap::voxelIndex(candidates[i], linear));
-      const std::optional<float> delta = voxelLogOdds(frame, center);
-      if (!delta) continue;
-      block_deltas[linear] = *delta;
-      ++updated[i];
-    }
+    updated[i] = blockLogOdds(frame, candidates[i], *map,
+                              &deltas[static_cast<std::size_t>(i) * VoxelBlock::kVolume]);
   }
 
   DepthIntegrationStats stats;
@@ -497,8 +597,8 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   tsl::robin_map<std::uint64_t, int> slot_of;
   for (int i = 0; i < count; ++i) {
     if (updated[i] == 0) continue;
-    touched.push_back(candidates[i]);
-    slot_of[packBlock(candidates[i])] = i;
+    touched.push_back(candidates[i].index);
+    slot_of[packBlock(candidates[i].index)] = i;
     stats.voxels_updated += updated[i];
   }
   stats.blocks_updated = touched.size();
