@@ -1,0 +1,438 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "occupancy_fusion/integrators/laser/polar_to_cartesian.h"
+
+namespace occupancy_fusion {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void addDelta(float delta, float *cell) {
+  *cell = std::isnan(*cell) ? delta : *cell + delta;
+}
+
+// Polar coordinates of raster points in the sensor's frame, in units of the
+// field's texels.
+class PolarLocator {
+public:
+  PolarLocator(const PolarField &field, const Pose2D &sensor)
+      : field_(field), sensor_(sensor),
+        fov_centre_(field.angle_min +
+                    0.5 * (field.beams - 1) * field.angle_increment) {}
+
+  // u: beams (beam b spans [b, b + 1)); v: range cells. Returns the range in m.
+  double locate(double x, double y, double *u, double *v) const {
+    const double dx = x - sensor_.x;
+    const double dy = y - sensor_.y;
+    const double range = std::sqrt(dx * dx + dy * dy);
+    double angle = fastAtan2(dy, dx) - sensor_.yaw - fov_centre_;
+    angle -=
+        2.0 * kPi * std::floor((angle + kPi) / (2.0 * kPi)); // into [-pi, pi)
+    *u =
+        (angle + fov_centre_ - field_.angle_min) / field_.angle_increment + 0.5;
+    *v = range / field_.range_resolution;
+    return range;
+  }
+  bool inside(double u, double v) const {
+    return u >= 0.0 && u < field_.beams && v < field_.cells;
+  }
+
+private:
+  const PolarField &field_;
+  Pose2D sensor_;
+  double fov_centre_;
+};
+
+double cellCentre(int origin, int i, double resolution) {
+  return (origin + i + 0.5) * resolution;
+}
+
+} // namespace
+
+const char *methodName(PolarToCartesianMethod method) {
+  switch (method) {
+  case PolarToCartesianMethod::kExact:
+    return "exact";
+  case PolarToCartesianMethod::kSampling:
+    return "sampling";
+  case PolarToCartesianMethod::kMipmap:
+    return "mipmap";
+  case PolarToCartesianMethod::kLines:
+    return "lines";
+  }
+  return "unknown";
+}
+
+PolarToCartesianMethod parsePolarToCartesianMethod(const std::string &name) {
+  for (PolarToCartesianMethod method :
+       {PolarToCartesianMethod::kExact, PolarToCartesianMethod::kSampling,
+        PolarToCartesianMethod::kMipmap, PolarToCartesianMethod::kLines}) {
+    if (name == methodName(method))
+      return method;
+  }
+  throw std::invalid_argument("unknown polar-to-cartesian method '" + name +
+                              "' (exact, sampling, mipmap, lines)");
+}
+
+// Minimax-style odd polynomial for atan on [0, 1] (error below 2e-6 rad), then
+// octant fix-ups.
+double fastAtan2(double y, double x) {
+  const double ax = std::abs(x);
+  const double ay = std::abs(y);
+  const double big = std::max(ax, ay);
+  if (big == 0.0)
+    return 0.0;
+  const double t = std::min(ax, ay) / big;
+  const double s = t * t;
+  double r =
+      t * (0.99997726 +
+           s * (-0.33262347 +
+                s * (0.19354346 +
+                     s * (-0.11643287 + s * (0.05265332 - s * 0.01172120)))));
+  if (ay > ax)
+    r = 0.5 * kPi - r;
+  if (x < 0.0)
+    r = kPi - r;
+  return y < 0.0 ? -r : r;
+}
+
+// --- lines
+// ---------------------------------------------------------------------------------
+
+void projectLines(const PolarField &field, const Pose2D &sensor,
+                  LogOddsRaster *raster) {
+  const double res = raster->resolution;
+  const int x0 =
+      static_cast<int>(std::floor(sensor.x / res)) - raster->origin_cell.x();
+  const int y0 =
+      static_cast<int>(std::floor(sensor.y / res)) - raster->origin_cell.y();
+  for (int b = 0; b < field.beams; ++b) {
+    const int observed = field.observed_cells[static_cast<std::size_t>(b)];
+    if (observed == 0)
+      continue;
+    const double angle = sensor.yaw + field.angle(b);
+    const double length = observed * field.range_resolution;
+    const int x1 = static_cast<int>(std::floor(
+                       (sensor.x + length * std::cos(angle)) / res)) -
+                   raster->origin_cell.x();
+    const int y1 = static_cast<int>(std::floor(
+                       (sensor.y + length * std::sin(angle)) / res)) -
+                   raster->origin_cell.y();
+    const float *values = field.value.data() + field.index(b, 0);
+    // Bresenham: integer error term, one cell per step along the major axis.
+    const int dx = std::abs(x1 - x0);
+    const int dy = -std::abs(y1 - y0);
+    const int sx = x0 < x1 ? 1 : -1;
+    const int sy = y0 < y1 ? 1 : -1;
+    int error = dx + dy;
+    for (int x = x0, y = y0;;) {
+      if (x >= 0 && y >= 0 && x < raster->width && y < raster->height) {
+        const double cx =
+            cellCentre(raster->origin_cell.x(), x, res) - sensor.x;
+        const double cy =
+            cellCentre(raster->origin_cell.y(), y, res) - sensor.y;
+        const int k = static_cast<int>(std::sqrt(cx * cx + cy * cy) /
+                                       field.range_resolution);
+        if (k < observed) {
+          addDelta(
+              values[k],
+              &raster->data[static_cast<std::size_t>(x + raster->width * y)]);
+        }
+      }
+      if (x == x1 && y == y1)
+        break;
+      const int twice = 2 * error;
+      if (twice >= dy) {
+        error += dy;
+        x += sx;
+      }
+      if (twice <= dx) {
+        error += dx;
+        y += sy;
+      }
+    }
+  }
+}
+
+// --- adaptive sampling
+// ---------------------------------------------------------------------
+
+void projectSampling(const PolarField &field, const Pose2D &sensor,
+                     int max_samples_per_axis, LogOddsRaster *raster) {
+  if (max_samples_per_axis < 1) {
+    throw std::invalid_argument(
+        "projectSampling: max_samples_per_axis must be >= 1");
+  }
+  const PolarLocator locator(field, sensor);
+  const double res = raster->resolution;
+  const double reach = field.cells * field.range_resolution + res;
+  const double polar_area =
+      field.range_resolution * field.angle_increment; // times rho
+#pragma omp parallel for schedule(dynamic, 8)
+  for (int y = 0; y < raster->height; ++y) {
+    const double cy = cellCentre(raster->origin_cell.y(), y, res);
+    for (int x = 0; x < raster->width; ++x) {
+      const double cx = cellCentre(raster->origin_cell.x(), x, res);
+      const double range = std::hypot(cx - sensor.x, cy - sensor.y);
+      if (range > reach)
+        continue;
+      const double ns =
+          res * res / (std::max(range, 1e-9) * polar_area); // Eq. 6
+      const int k = std::clamp(static_cast<int>(std::ceil(std::sqrt(ns))), 1,
+                               max_samples_per_axis);
+      double sum = 0.0;
+      bool any_observed = false;
+      for (int j = 0; j < k; ++j) {
+        const double py = cy + res * ((j + 0.5) / k - 0.5);
+        for (int i = 0; i < k; ++i) {
+          const double px = cx + res * ((i + 0.5) / k - 0.5);
+          double u = 0.0;
+          double v = 0.0;
+          locator.locate(px, py, &u, &v);
+          if (!locator.inside(u, v))
+            continue;
+          const int index =
+              field.index(static_cast<int>(u), static_cast<int>(v));
+          if (field.observed[static_cast<std::size_t>(index)] == 0.0f)
+            continue;
+          any_observed = true;
+          sum += field.value[static_cast<std::size_t>(index)];
+        }
+      }
+      if (any_observed) {
+        addDelta(
+            static_cast<float>(sum / (k * k)),
+            &raster->data[static_cast<std::size_t>(x + raster->width * y)]);
+      }
+    }
+  }
+}
+
+// --- mipmap
+// --------------------------------------------------------------------------------
+
+void MipmapConfig::validate() const {
+  if (!(std::isfinite(safety_radius) && safety_radius >= 0.0)) {
+    throw std::invalid_argument(
+        "MipmapConfig.safety_radius must be finite and >= 0");
+  }
+}
+
+namespace {
+
+int levelCount(int size) {
+  int levels = 1;
+  while (size > 1) {
+    size = (size + 1) / 2;
+    ++levels;
+  }
+  return levels;
+}
+
+// Halves one axis of a level: texel j of the result averages texels 2j and 2j +
+// 1 (or copies the last one when the size is odd).
+template <bool kAlongBeams>
+void halve(const std::vector<float> &in, int beams, int cells,
+           std::vector<float> *out) {
+  const int out_beams = kAlongBeams ? (beams + 1) / 2 : beams;
+  const int out_cells = kAlongBeams ? cells : (cells + 1) / 2;
+  out->assign(static_cast<std::size_t>(out_beams) * out_cells, 0.0f);
+  for (int b = 0; b < out_beams; ++b) {
+    for (int k = 0; k < out_cells; ++k) {
+      const int b0 = kAlongBeams ? 2 * b : b;
+      const int k0 = kAlongBeams ? k : 2 * k;
+      const int b1 = kAlongBeams ? std::min(b0 + 1, beams - 1) : b0;
+      const int k1 = kAlongBeams ? k0 : std::min(k0 + 1, cells - 1);
+      (*out)[static_cast<std::size_t>(b * out_cells + k)] =
+          0.5f * (in[static_cast<std::size_t>(b0 * cells + k0)] +
+                  in[static_cast<std::size_t>(b1 * cells + k1)]);
+    }
+  }
+}
+
+} // namespace
+
+PolarMipmap::PolarMipmap(const PolarField &field, double cell_size) {
+  angle_levels_ = levelCount(field.beams);
+  // A cell spans about cell_size / d_rho range cells wherever it lies: only the
+  // two range levels around log2 of that are ever read.
+  const double range_footprint =
+      std::log2(std::max(1.0, cell_size / field.range_resolution));
+  first_range_level_ = std::min(static_cast<int>(std::floor(range_footprint)),
+                                levelCount(field.cells) - 1);
+  range_levels_ = std::min(2, levelCount(field.cells) - first_range_level_);
+
+  Level base{field.beams, field.cells, field.value, field.observed};
+  for (int r = 0; r < first_range_level_; ++r) {
+    Level coarser;
+    coarser.beams = base.beams;
+    coarser.cells = (base.cells + 1) / 2;
+    halve<false>(base.value, base.beams, base.cells, &coarser.value);
+    halve<false>(base.observed, base.beams, base.cells, &coarser.observed);
+    base = std::move(coarser);
+  }
+  levels_.resize(static_cast<std::size_t>(range_levels_ * angle_levels_));
+  for (int r = 0; r < range_levels_; ++r) {
+    Level &first = levels_[static_cast<std::size_t>(r * angle_levels_)];
+    if (r == 0) {
+      first = base;
+    } else {
+      const Level &finer =
+          levels_[static_cast<std::size_t>((r - 1) * angle_levels_)];
+      first.beams = finer.beams;
+      first.cells = (finer.cells + 1) / 2;
+      halve<false>(finer.value, finer.beams, finer.cells, &first.value);
+      halve<false>(finer.observed, finer.beams, finer.cells, &first.observed);
+    }
+    for (int a = 1; a < angle_levels_; ++a) {
+      const Level &finer =
+          levels_[static_cast<std::size_t>(r * angle_levels_ + a - 1)];
+      Level &coarser = levels_[static_cast<std::size_t>(r * angle_levels_ + a)];
+      coarser.beams = (finer.beams + 1) / 2;
+      coarser.cells = finer.cells;
+      halve<true>(finer.value, finer.beams, finer.cells, &coarser.value);
+      halve<true>(finer.observed, finer.beams, finer.cells, &coarser.observed);
+    }
+  }
+}
+
+bool PolarMipmap::hasRangeLevel(int range_level) const {
+  return range_level >= first_range_level_ &&
+         range_level < first_range_level_ + range_levels_;
+}
+
+const PolarMipmap::Level &PolarMipmap::level(int angle_level,
+                                             int range_level) const {
+  const int r =
+      std::clamp(range_level - first_range_level_, 0, range_levels_ - 1);
+  const int a = std::clamp(angle_level, 0, angle_levels_ - 1);
+  return levels_[static_cast<std::size_t>(r * angle_levels_ + a)];
+}
+
+void PolarMipmap::lookup(int angle_level, int range_level, double u, double v,
+                         float *value, float *observed) const {
+  const Level &l = level(angle_level, range_level);
+  // Texel j of level n spans base [j 2^n, (j + 1) 2^n): its centre is at (j +
+  // 0.5) 2^n.
+  const double tu =
+      std::ldexp(u, -std::clamp(angle_level, 0, angle_levels_ - 1)) - 0.5;
+  const double tv =
+      std::ldexp(v, -std::clamp(range_level, first_range_level_,
+                                first_range_level_ + range_levels_ - 1)) -
+      0.5;
+  const int b0 = static_cast<int>(std::floor(tu));
+  const int k0 = static_cast<int>(std::floor(tv));
+  const float fu = static_cast<float>(tu - b0);
+  const float fv = static_cast<float>(tv - k0);
+  const int bl = std::clamp(b0, 0, l.beams - 1);
+  const int bh = std::clamp(b0 + 1, 0, l.beams - 1);
+  const int kl = std::clamp(k0, 0, l.cells - 1);
+  const int kh = std::clamp(k0 + 1, 0, l.cells - 1);
+  auto bilinear = [&](const std::vector<float> &t) {
+    const float low =
+        t[static_cast<std::size_t>(bl * l.cells + kl)] * (1.0f - fv) +
+        t[static_cast<std::size_t>(bl * l.cells + kh)] * fv;
+    const float high =
+        t[static_cast<std::size_t>(bh * l.cells + kl)] * (1.0f - fv) +
+        t[static_cast<std::size_t>(bh * l.cells + kh)] * fv;
+    return low * (1.0f - fu) + high * fu;
+  };
+  *value = bilinear(l.value);
+  *observed = bilinear(l.observed);
+}
+
+namespace {
+
+// The worst case near the sensor (Sec. V-A): the largest log-ratio any beam
+// observed within `radius` (plus the cells that straddle it). Returns false if
+// nothing was observed there.
+bool worstCaseNearSensor(const PolarField &field, double radius, float *worst) {
+  const int cells = std::min(
+      field.cells,
+      static_cast<int>(std::ceil(radius / field.range_resolution)) + 1);
+  bool any = false;
+  *worst = -std::numeric_limits<float>::infinity();
+  for (int b = 0; b < field.beams; ++b) {
+    const int observed =
+        std::min(cells, field.observed_cells[static_cast<std::size_t>(b)]);
+    for (int k = 0; k < observed; ++k) {
+      *worst = std::max(
+          *worst, field.value[static_cast<std::size_t>(field.index(b, k))]);
+      any = true;
+    }
+  }
+  return any;
+}
+
+} // namespace
+
+void projectMipmap(const PolarField &field, const Pose2D &sensor,
+                   const MipmapConfig &config, LogOddsRaster *raster) {
+  config.validate();
+  const double res = raster->resolution;
+  const PolarMipmap mipmap(field, res);
+  const PolarLocator locator(field, sensor);
+  float worst = 0.0f;
+  const bool has_worst =
+      worstCaseNearSensor(field, config.safety_radius, &worst);
+  const double range_level =
+      std::log2(std::max(1.0, res / field.range_resolution));
+  const int range_low = static_cast<int>(std::floor(range_level));
+  // Without a coarser range level (a field only a few cells long) the finer one
+  // takes it all.
+  const float range_fraction = mipmap.hasRangeLevel(range_low + 1)
+                                   ? static_cast<float>(range_level - range_low)
+                                   : 0.0f;
+  const double angular_footprint =
+      res / field.angle_increment; // beams spanned, times range
+
+#pragma omp parallel for schedule(dynamic, 8)
+  for (int y = 0; y < raster->height; ++y) {
+    const double cy = cellCentre(raster->origin_cell.y(), y, res);
+    for (int x = 0; x < raster->width; ++x) {
+      const double cx = cellCentre(raster->origin_cell.x(), x, res);
+      double u = 0.0;
+      double v = 0.0;
+      const double range = locator.locate(cx, cy, &u, &v);
+      if (!locator.inside(u, v))
+        continue;
+      float *cell =
+          &raster->data[static_cast<std::size_t>(x + raster->width * y)];
+      if (range < config.safety_radius) {
+        if (has_worst)
+          addDelta(worst, cell);
+        continue;
+      }
+      const double angle_level =
+          std::log2(std::max(1.0, angular_footprint / range));
+      const int angle_low = static_cast<int>(std::floor(angle_level));
+      const float angle_fraction = static_cast<float>(angle_level - angle_low);
+      float value = 0.0f;
+      float observed = 0.0f;
+      for (int dr = 0; dr < 2; ++dr) {
+        const float wr = dr == 0 ? 1.0f - range_fraction : range_fraction;
+        if (wr == 0.0f || !mipmap.hasRangeLevel(range_low + dr))
+          continue;
+        for (int da = 0; da < 2; ++da) {
+          const float wa = da == 0 ? 1.0f - angle_fraction : angle_fraction;
+          if (wa == 0.0f)
+            continue;
+          float level_value = 0.0f;
+          float level_observed = 0.0f;
+          mipmap.lookup(angle_low + da, range_low + dr, u, v, &level_value,
+                        &level_observed);
+          value += wr * wa * level_value;
+          observed += wr * wa * level_observed;
+        }
+      }
+      if (observed > 0.0f)
+        addDelta(value, cell);
+    }
+  }
+}
+
+} // namespace occupancy_fusion
