@@ -157,6 +157,8 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
           static_cast<float>(measured);
     }
   }
+  // Every layer reads all of M, so each is the same work: one layer per thread at a time.
+#pragma omp parallel for schedule(dynamic, 1)
   for (int level = 1; level < static_cast<int>(layers_.size()); ++level) {
     buildLayer(level, selection);
   }
@@ -185,27 +187,26 @@ void DistancePyramid::buildLayer(int level, PyramidSelection selection) {
   layer.height = (full.height + side - 1) / side;
   layer.cells.assign(static_cast<std::size_t>(layer.width) * layer.height, kNaN);
   const float target = static_cast<float>(threshold(level));
-#pragma omp parallel for schedule(static)
+  // Row by row through M, keeping each cell's best so far: the same candidates in the same
+  // order (rows of a cell top to bottom, each left to right) as a cell-by-cell scan, so ties go
+  // to the same measurement. NaN scores never compare smaller, so invalid pixels drop out.
+  std::vector<float> best_score(static_cast<std::size_t>(layer.width));
   for (int cell_v = 0; cell_v < layer.height; ++cell_v) {
-    for (int cell_u = 0; cell_u < layer.width; ++cell_u) {
-      float best = kNaN;
-      float best_score = std::numeric_limits<float>::infinity();
-      const int v_end = std::min(full.height, (cell_v + 1) * side);
-      const int u_end = std::min(full.width, (cell_u + 1) * side);
-      for (int v = cell_v * side; v < v_end; ++v) {
-        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
-        for (int u = cell_u * side; u < u_end; ++u) {
-          const float value = row[u];
-          if (!isValidMeasurement(value)) continue;
-          const float score =
-              selection == PyramidSelection::kMinimum ? value : std::abs(value - target);
-          if (score < best_score) {
-            best_score = score;
-            best = value;
-          }
+    float* best = &layer.cells[static_cast<std::size_t>(cell_v) * layer.width];
+    std::fill(best_score.begin(), best_score.end(), std::numeric_limits<float>::infinity());
+    const int v_end = std::min(full.height, (cell_v + 1) * side);
+    for (int v = cell_v * side; v < v_end; ++v) {
+      const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+      for (int u = 0; u < full.width; ++u) {
+        const float value = row[u];
+        const float score =
+            selection == PyramidSelection::kMinimum ? value : std::abs(value - target);
+        const int cell_u = u >> level;
+        if (score < best_score[cell_u]) {
+          best_score[cell_u] = score;
+          best[cell_u] = value;
         }
       }
-      layer.cells[static_cast<std::size_t>(cell_v) * layer.width + cell_u] = best;
     }
   }
 }

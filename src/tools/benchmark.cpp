@@ -27,6 +27,9 @@
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
+
+int runDepth(const CommandLine& args);  // benchmark_depth.cpp
+
 namespace {
 
 // ---------------------------------------------------------------------------------------------
@@ -205,6 +208,15 @@ const std::vector<Workload>& workloads() {
        "      our voxel map and into octomap::OcTree::insertPointCloud; ratios are ours / octomap",
        {"resolution", "points", "clouds", "repetitions", "max_range"},
        runPointCloud},
+      {"depth",
+       "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--k K] "
+       "[--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal]\n"
+       "      a depth sequence in the 7-Scenes layout through the pyramidal depth integrator,\n"
+       "      and K of its frames as point clouds through octomap::OcTree::insertPointCloud\n"
+       "      (plain and discretized); speedup is octomap / ours in ms per frame",
+       {"folder", "resolution", "frames", "octomap-frames", "k", "sigma", "sigma_quadratic",
+        "method"},
+       runDepth},
   };
   return table;
 }
@@ -225,8 +237,14 @@ int runMain(int argc, char** argv) {
   for (const Workload& workload : workloads()) {
     if (name != workload.name) continue;
     try {
-      // The workload's name stands in for argv[0]: CommandLine skips it.
-      const CommandLine args(argc - 1, argv + 1, workload.value_options, {});
+      // The workload's name stands in for argv[0]: CommandLine skips it. A first argument that
+      // is not an option is the input folder ("benchmark depth <folder>"): --folder.
+      std::vector<const char*> arguments(argv + 1, argv + argc);
+      if (arguments.size() > 1 && std::string(arguments[1]).rfind("--", 0) != 0) {
+        arguments.insert(arguments.begin() + 1, "--folder");
+      }
+      const CommandLine args(static_cast<int>(arguments.size()), arguments.data(),
+                             workload.value_options, {});
       return workload.run(args);
     } catch (const UsageError& error) {
       std::cerr << "benchmark " << name << ": " << error.what() << "\n";
