@@ -1,0 +1,162 @@
+// Stereo occupancy mapping after Schauwecker & Zell 2014, "Robust and Efficient
+// Volumetric Occupancy Mapping with an Application to Stereo Vision" (Sec.
+// III): OctoMap-style ray casting in which each voxel's update is weighted by
+// the probability that the voxel is visible from the sensor (Eq. 1-3, estimated
+// from the map itself), integrated with the Bayesian network of Fig. 2b (Eq.
+// 4-6), and continued past the measured point with the stereo depth error (Eq.
+// 7-8). One update per voxel per frame, found through a previous-ray cache in
+// front of a hash table (Sec. III-D). The OctoMap update on the same rays is
+// the baseline mode.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/sensors/disparity_image.h"
+
+namespace occupancy_fusion {
+
+enum class StereoIntegrationMethod {
+  kVisibility,  // the paper's method, Eq. 1-8
+  kOctomap,     // OctoMap's update on the same rays: free up to the end voxel, a
+                // hit in it
+};
+std::string toString(StereoIntegrationMethod method);
+StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& name);
+
+struct VisibilityStereoConfig {
+  StereoIntegrationMethod method = StereoIntegrationMethod::kVisibility;
+
+  // Sensor model of the Bayesian network (Fig. 2b), Table I.
+  double prob_hit_visible_occupied = 0.55;  // P(H | V, O)
+  double prob_hit_visible_free = 0.43;      // P(H | V, not O)
+  double prob_hit_invisible = 0.05;         // P(H | not V)
+  // Eq. 3, Table I: P(V_i | C_i, V_i-1) and P(V_i | not C_i, V_i-1).
+  double prob_visible_if_occluded = 0.20;
+  double prob_visible_if_not_occluded = 1.00;
+  // q_min: a ray stops where the visibility falls below it. q_max: visibilities
+  // at or above it count as 1 (Sec. III-A), so that clamped free voxels (P(O) =
+  // the map's clamp_min) do not erode the visibility along a free ray. Table I:
+  // {0.1, 0.7}.
+  double visibility_min = 0.1;
+  double visibility_max = 0.7;
+  // P(O) of a never-observed voxel as the prior of Eq. 4-6.
+  double unknown_occupancy = 0.5;
+  // P(O) of a never-observed neighbour in Eq. 1. At the prior 0.5 unknown space is partly
+  // occluding (each step through it multiplies the visibility by 1 - 0.8 * 0.5 = 0.6, below
+  // q_max), so a new view is mapped a few voxels deeper with every frame: the paper's Fig. 5a.
+  double unknown_neighbour_occupancy = 0.5;
+  // Eq. 8: the ray stops at the first voxel whose P(I_v) reaches this value
+  // ("close to 1"); that voxel gets a full hit, P(O_v | H).
+  double inside_stop_probability = 0.99;
+  // m; points farther from the sensor are dropped. Negative: unlimited.
+  double max_range = -1.0;
+  // The disparity image's conversion to points (sigma_d of Eq. 7, input
+  // resolution).
+  DisparityConversionConfig disparity;
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+// Phi, the standard normal CDF, tabulated with linear interpolation (Sec. III-D
+// pre-computes P(I_v) = Phi((z_q - z) / sigma_z) over depth and distance; with
+// sigma_z folded into the argument the same table needs one dimension). Outside
+// [-kRange, kRange] it returns 0 or 1.
+class NormalCdfTable {
+ public:
+  static constexpr double kRange = 6.0;
+  static constexpr int kSize = 4097;
+  NormalCdfTable();
+  double operator()(double x) const {
+    if (!(x > -kRange)) return 0.0;  // also NaN
+    if (x >= kRange) return 1.0;
+    const double position = (x + kRange) * kScale;
+    const int i = static_cast<int>(position);
+    const double fraction = position - i;
+    return values_[i] + fraction * (values_[i + 1] - values_[i]);
+  }
+
+ private:
+  static constexpr double kScale = (kSize - 1) / (2.0 * kRange);
+  std::vector<double> values_;
+};
+
+// Eq. 3 with the q_max clamp: visibility of a voxel whose predecessor on the
+// ray has visibility previous and whose local occlusion (Eq. 1) is p_occluded.
+double nextVisibility(double previous, double p_occluded, const VisibilityStereoConfig& config);
+// Eq. 4-6: P(O_v | M) for a hit (M = H) or a miss (M = not H) at visibility
+// P(V_v).
+double occupancyAfterMeasurement(double p_occupied, bool hit, double visibility,
+                                 const VisibilityStereoConfig& config);
+// Eq. 8: P(I_v) P(O_v | H) + (1 - P(I_v)) P(O_v | not H).
+double occupancyAfterInterpolatedMeasurement(double p_occupied, double p_inside, double visibility,
+                                             const VisibilityStereoConfig& config);
+
+// The reduced update of one voxel for one frame.
+struct StereoVoxelUpdate {
+  VoxelIndex index;
+  float p_inside = 0.0f;    // max over the frame's rays of P(I_v) (kOctomap: 1 hit, 0 miss)
+  float visibility = 0.0f;  // max over the frame's rays of P(V_v) (kOctomap: 1)
+};
+
+struct StereoIntegrationStats {
+  std::size_t points = 0;          // points given (after the disparity conversion)
+  std::size_t skipped_points = 0;  // non-finite, beyond max_range or outside the map's range
+  std::size_t rays = 0;            // rays cast
+  std::size_t rays_invisible = 0;  // rays stopped early because P(V) fell below q_min
+  std::size_t voxel_visits = 0;    // voxels walked over all rays
+  std::size_t cache_hits = 0;      // of those, found through the previous-ray cache
+  std::size_t updated_voxels = 0;  // distinct voxels updated (one update each)
+  double seconds = 0.0;            // wall time of the call
+
+  double cacheHitRate() const {
+    return voxel_visits == 0 ? 0.0 : static_cast<double>(cache_hits) / voxel_visits;
+  }
+  double milliseconds() const { return 1e3 * seconds; }
+};
+
+// Thread safety: const member functions may run concurrently. The map is read
+// (copies of the blocks the rays pass, under its shared lock) while rays are
+// cast on omp_get_max_threads() threads, then written in one
+// VoxelMap::updateBlocks call.
+class VisibilityStereoIntegrator {
+ public:
+  explicit VisibilityStereoIntegrator(const VisibilityStereoConfig& config = {});  // validates
+
+  const VisibilityStereoConfig& config() const { return config_; }
+
+  // A disparity image of the left camera whose optical frame has pose
+  // T_map_camera.
+  StereoIntegrationStats integrate(const DisparityImageView& disparity, const StereoCamera& camera,
+                                   const Eigen::Isometry3d& T_map_camera, VoxelMap* map) const;
+  // Points in the map frame seen from sensor_origin, each with the standard
+  // deviation of its distance from the origin along its ray (m; sigma_z scaled
+  // by range / z for a camera point).
+  StereoIntegrationStats integrate(const std::vector<Eigen::Vector3f>& points_in_map,
+                                   const std::vector<float>& range_sigmas,
+                                   const Eigen::Vector3d& sensor_origin, VoxelMap* map) const;
+
+  // The ray-casting half of integrate(): the frame's reduced updates, reading
+  // the map but not writing it. Fills every stats field except seconds.
+  StereoIntegrationStats computeUpdates(const std::vector<Eigen::Vector3f>& points_in_map,
+                                        const std::vector<float>& range_sigmas,
+                                        const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
+                                        std::vector<StereoVoxelUpdate>* updates) const;
+  // The writing half: one VoxelMap::updateBlocks call.
+  void apply(const std::vector<StereoVoxelUpdate>& updates, VoxelMap* map) const;
+
+  // Points of a disparity image in the map frame with their range sigmas.
+  void disparityToMapPoints(const DisparityImageView& disparity, const StereoCamera& camera,
+                            const Eigen::Isometry3d& T_map_camera,
+                            std::vector<Eigen::Vector3f>* points_in_map,
+                            std::vector<float>* range_sigmas, std::size_t* pixels_read) const;
+
+ private:
+  VisibilityStereoConfig config_;
+  NormalCdfTable phi_;
+};
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,91 @@
+// Stereo disparity images and their conversion to 3D points with the stereo
+// depth-error model of Schauwecker & Zell 2014, "Robust and Efficient
+// Volumetric Occupancy Mapping with an Application to Stereo Vision" (Sec.
+// III-C, Eq. 7).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace occupancy_fusion {
+
+// A rectified stereo pair as the disparity image needs it, in the ROS
+// convention (stereo_msgs/DisparityImage f and T, the left camera_info's
+// principal point): pixel (u, v) has its centre at integer (u, v), the optical
+// frame has z forward, x right, y down.
+struct StereoCamera {
+  double fx = 525.0;      // px, focal length of the left camera (DisparityImage.f)
+  double fy = 525.0;      // px, usually equal to fx after rectification
+  double cx = 319.5;      // px
+  double cy = 239.5;      // px
+  double baseline = 0.1;  // m, distance between the optical centres (DisparityImage.T)
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+// A non-owning, row-major view of disparity in pixels of the left image (d = fx
+// * baseline / z). NaN, infinite and non-positive values mark pixels without a
+// match. It can wrap a std::vector, a cv::Mat of CV_32FC1 or the data of a
+// stereo_msgs/DisparityImage without copying.
+struct DisparityImageView {
+  int width = 0;
+  int height = 0;
+  const float* disparity = nullptr;  // disparity[v * row_stride + u]
+  int row_stride = 0;                // floats per row; 0 means width
+
+  float at(int u, int v) const {
+    return disparity[static_cast<std::size_t>(v) * (row_stride > 0 ? row_stride : width) + u];
+  }
+  void validate() const;  // throws std::invalid_argument unless non-null with positive size
+};
+
+// The paper's input resolutions (Sec. IV): a matcher that outputs half or
+// quarter resolution keeps the full-resolution disparity values at every 2nd or
+// 4th pixel of each row and column.
+enum class InputResolution { kFull = 1, kHalf = 2, kQuarter = 4 };
+std::string toString(InputResolution resolution);
+InputResolution inputResolutionFromString(const std::string& name);  // "full", "half", "quarter"
+inline int pixelStep(InputResolution resolution) { return static_cast<int>(resolution); }
+
+struct DisparityConversionConfig {
+  // px, standard deviation of the matcher's disparity error, sigma_d of Eq. 7.
+  // A sensor property; 0.5 px is typical of sub-pixel block matching (the paper
+  // leaves it open).
+  double disparity_sigma_px = 0.5;
+  // px; smaller disparities (farther points) are dropped. 0 keeps every
+  // positive disparity.
+  double min_disparity_px = 0.0;
+  InputResolution input_resolution = InputResolution::kFull;
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+// Eq. 7: lambda = sigma_d / (b * f), sigma_z = lambda * z^2, z = f * b / d.
+inline double depthFromDisparity(double disparity_px, double focal_px, double baseline_m) {
+  return focal_px * baseline_m / disparity_px;
+}
+inline double depthErrorFactor(double disparity_sigma_px, double baseline_m, double focal_px) {
+  return disparity_sigma_px / (baseline_m * focal_px);
+}
+inline double depthSigma(double depth_m, double lambda) { return lambda * depth_m * depth_m; }
+
+// Points of a disparity image in the left camera's optical frame, with each
+// point's depth standard deviation sigma_z (Eq. 7, along the optical z axis),
+// in pixel order (row-major).
+struct StereoPoints {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> depth_sigmas;  // m, sigma_z of points[i]
+  std::size_t pixels_read = 0;      // pixels looked at (after sub-sampling)
+
+  std::size_t size() const { return points.size(); }
+};
+
+// Converts the valid pixels (finite d > max(0, min_disparity_px)) at the
+// configured input resolution: pixel (u, v) with depth z gives z * ((u - cx) /
+// fx, (v - cy) / fy, 1).
+StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCamera& camera,
+                               const DisparityConversionConfig& config);
+
+}  // namespace occupancy_fusion

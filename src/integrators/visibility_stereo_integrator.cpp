@@ -1,0 +1,518 @@
+#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+
+#include <tsl/robin_map.h>
+
+#include "occupancy_fusion/integrators/ray_traversal.h"
+
+namespace occupancy_fusion {
+
+// ---------------------------------------------------------------------------------------------
+// Configuration and the equations
+
+std::string toString(StereoIntegrationMethod method) {
+  return method == StereoIntegrationMethod::kOctomap ? "octomap" : "visibility";
+}
+
+StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& name) {
+  if (name == "visibility") return StereoIntegrationMethod::kVisibility;
+  if (name == "octomap") return StereoIntegrationMethod::kOctomap;
+  throw std::invalid_argument("stereo method must be visibility or octomap, not '" + name + "'");
+}
+
+namespace {
+
+void requireOpenUnit(double value, const char* field) {
+  if (!(value > 0 && value < 1)) {
+    throw std::invalid_argument(std::string("VisibilityStereoConfig.") + field +
+                                " must be in (0, 1)");
+  }
+}
+
+}  // namespace
+
+void VisibilityStereoConfig::validate() const {
+  if (method != StereoIntegrationMethod::kVisibility &&
+      method != StereoIntegrationMethod::kOctomap) {
+    throw std::invalid_argument("VisibilityStereoConfig.method is not a known method");
+  }
+  requireOpenUnit(prob_hit_visible_occupied, "prob_hit_visible_occupied");
+  requireOpenUnit(prob_hit_visible_free, "prob_hit_visible_free");
+  requireOpenUnit(prob_hit_invisible, "prob_hit_invisible");
+  if (!(prob_hit_visible_occupied > prob_hit_visible_free)) {
+    // Otherwise a hit would lower the occupancy of a visible voxel.
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.prob_hit_visible_"
+        "occupied must exceed prob_hit_visible_free");
+  }
+  if (!(prob_visible_if_occluded >= 0 && prob_visible_if_occluded <= 1)) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.prob_visible_if_occluded must be in [0, 1]");
+  }
+  if (!(prob_visible_if_not_occluded >= 0 && prob_visible_if_not_occluded <= 1)) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.prob_visible_if_not_"
+        "occluded must be in [0, 1]");
+  }
+  if (!(visibility_max > 0 && visibility_max <= 1)) {
+    throw std::invalid_argument("VisibilityStereoConfig.visibility_max must be in (0, 1]");
+  }
+  if (!(visibility_min > 0 && visibility_min <= visibility_max)) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.visibility_min must be in (0, visibility_max]");
+  }
+  requireOpenUnit(unknown_occupancy, "unknown_occupancy");
+  if (!(unknown_neighbour_occupancy >= 0 && unknown_neighbour_occupancy <= 1)) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.unknown_neighbour_occupancy must be in [0, 1]");
+  }
+  if (!(inside_stop_probability > 0.5 && inside_stop_probability < 1)) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.inside_stop_probability must be in (0.5, 1)");
+  }
+  if (std::isnan(max_range)) {
+    throw std::invalid_argument("VisibilityStereoConfig.max_range must not be NaN");
+  }
+  disparity.validate();
+}
+
+NormalCdfTable::NormalCdfTable() : values_(kSize + 1) {
+  for (int i = 0; i < kSize; ++i) {
+    const double x = -kRange + i / kScale;
+    values_[i] = 0.5 * std::erfc(-x / std::sqrt(2.0));
+  }
+  values_[kSize] = values_[kSize - 1];  // read by operator() only with fraction 0
+}
+
+double nextVisibility(double previous, double p_occluded, const VisibilityStereoConfig& config) {
+  // Eq. 3: P(V_i | not V_i-1) = 0 leaves only the terms conditioned on a
+  // visible predecessor.
+  const double visibility = previous * (config.prob_visible_if_occluded * p_occluded +
+                                        config.prob_visible_if_not_occluded * (1.0 - p_occluded));
+  return visibility >= config.visibility_max ? 1.0 : visibility;
+}
+
+double occupancyAfterMeasurement(double p_occupied, bool hit, double visibility,
+                                 const VisibilityStereoConfig& config) {
+  // Likelihoods of the measurement M (a hit or a miss) under each state of Fig.
+  // 2b.
+  auto likelihood = [hit](double p_hit) { return hit ? p_hit : 1.0 - p_hit; };
+  const double m_invisible = likelihood(config.prob_hit_invisible);
+  const double m_occupied = likelihood(config.prob_hit_visible_occupied);
+  const double m_free = likelihood(config.prob_hit_visible_free);
+  const double m_given_occupied = m_invisible * (1.0 - visibility) + m_occupied * visibility;  // 5
+  const double m_total = m_invisible * (1.0 - visibility) +
+                         visibility * (m_occupied * p_occupied + m_free * (1.0 - p_occupied));  // 6
+  return m_given_occupied * p_occupied / m_total;  // Eq. 4
+}
+
+double occupancyAfterInterpolatedMeasurement(double p_occupied, double p_inside, double visibility,
+                                             const VisibilityStereoConfig& config) {
+  const double after_hit = occupancyAfterMeasurement(p_occupied, true, visibility, config);
+  const double after_miss = occupancyAfterMeasurement(p_occupied, false, visibility, config);
+  return p_inside * after_hit + (1.0 - p_inside) * after_miss;  // Eq. 8
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ray casting
+
+namespace {
+
+// Voxel keys relative to the frame's origin voxel, 21 bits per axis: rays
+// longer than 2^20 voxels are skipped, so every key of a frame is distinct.
+constexpr int kKeyBits = 21;
+constexpr int kMaxOffset = 1 << (kKeyBits - 1);
+
+std::uint64_t voxelKey(const VoxelIndex& index, const VoxelIndex& origin) {
+  constexpr std::uint64_t kMask = (std::uint64_t{1} << kKeyBits) - 1;
+  auto field = [](int offset) { return static_cast<std::uint64_t>(offset + kMaxOffset) & kMask; };
+  return field(index.x() - origin.x()) | (field(index.y() - origin.y()) << kKeyBits) |
+         (field(index.z() - origin.z()) << (2 * kKeyBits));
+}
+
+// Blocks as VoxelUpdateSet packs them (21 bits per axis cover VoxelMap's block
+// range).
+std::uint64_t blockKey(const BlockIndex& block) {
+  constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
+  auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & kMask; };
+  return field(block.x()) | (field(block.y()) << 21) | (field(block.z()) << 42);
+}
+
+struct KeyHash {
+  std::size_t operator()(std::uint64_t key) const {
+    const std::uint64_t mixed = key * 0x9E3779B97F4A7C15ull;
+    return static_cast<std::size_t>(mixed ^ (mixed >> 29));
+  }
+};
+
+// The frame's updates, one entry per voxel, reduced on insertion. Entries live
+// in a vector so that the previous-ray cache can keep their positions (a
+// robin-hood table moves its values).
+class FrameUpdates {
+ public:
+  std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
+    const auto [it, inserted] =
+        slots_.try_emplace(voxelKey(index, origin), static_cast<std::uint32_t>(entries_.size()));
+    if (inserted) entries_.push_back({index, 0.0f, 0.0f});
+    return it->second;
+  }
+  // Reduction to one update per voxel: the largest P(I_v) (a hit wins over a
+  // miss, as in OctoMap) and the largest visibility (see reduce()).
+  void reduce(std::uint32_t entry, float p_inside, float visibility) {
+    StereoVoxelUpdate& update = entries_[entry];
+    update.p_inside = std::max(update.p_inside, p_inside);
+    update.visibility = std::max(update.visibility, visibility);
+  }
+  void merge(const FrameUpdates& other, const VoxelIndex& origin) {
+    for (const StereoVoxelUpdate& theirs : other.entries_) {
+      reduce(findOrInsert(theirs.index, origin), theirs.p_inside, theirs.visibility);
+    }
+  }
+  std::vector<StereoVoxelUpdate>& entries() { return entries_; }
+
+ private:
+  tsl::robin_map<std::uint64_t, std::uint32_t, KeyHash> slots_;
+  std::vector<StereoVoxelUpdate> entries_;
+};
+
+// Read access to the map for one thread and frame: blocks are copied once
+// (under the map's shared lock) and then read without locking; the map is not
+// written during ray casting.
+class MapSnapshot {
+ public:
+  MapSnapshot(const VoxelMap& map, float unknown_log_odds)
+      : map_(map), unknown_log_odds_(unknown_log_odds) {}
+
+  float logOdds(const VoxelIndex& index) {
+    const BlockIndex block = VoxelMap::blockOf(index);
+    const VoxelBlock* copy = find(block);
+    if (copy == nullptr) return unknown_log_odds_;
+    const float value = copy->log_odds[VoxelMap::linearIndexInBlock(index)];
+    return VoxelBlock::isKnown(value) ? value : unknown_log_odds_;
+  }
+
+ private:
+  const VoxelBlock* find(const BlockIndex& block) {
+    const std::uint64_t key = blockKey(block);
+    if (last_valid_ && key == last_key_) return last_;
+    auto it = blocks_.find(key);
+    if (it == blocks_.end()) {
+      auto copy = std::make_unique<VoxelBlock>();
+      if (!map_.copyBlock(block, copy.get())) copy.reset();
+      it = blocks_.emplace(key, std::move(copy)).first;
+    }
+    last_valid_ = true;
+    last_key_ = key;
+    last_ = it->second.get();
+    return last_;
+  }
+
+  const VoxelMap& map_;
+  float unknown_log_odds_;
+  tsl::robin_map<std::uint64_t, std::unique_ptr<VoxelBlock>, KeyHash> blocks_;
+  bool last_valid_ = false;
+  std::uint64_t last_key_ = 0;
+  const VoxelBlock* last_ = nullptr;
+};
+
+// Eq. 1: P(C_v) = min P(O) over the (up to three) neighbours behind the faces
+// of v that face the sensor. A face is visible when the sensor lies beyond its
+// plane: along an axis where the sensor shares v's slab, no face is visible and
+// that neighbour is left out (the sensor's own voxel has none: P(C) = 0). min
+// P(O) = sigmoid(min log-odds), one exp instead of three.
+double localOcclusion(const VoxelIndex& voxel, const VoxelIndex& origin, MapSnapshot* snapshot) {
+  float min_log_odds = std::numeric_limits<float>::infinity();
+  for (int axis = 0; axis < 3; ++axis) {
+    if (voxel[axis] == origin[axis]) continue;
+    VoxelIndex neighbour = voxel;
+    neighbour[axis] += voxel[axis] > origin[axis] ? -1 : 1;
+    min_log_odds = std::min(min_log_odds, snapshot->logOdds(neighbour));
+  }
+  if (min_log_odds == std::numeric_limits<float>::infinity()) return 0.0;
+  return probabilityFromLogOdds(min_log_odds);
+}
+
+// Sec. III-D: the voxels of the previous ray, by position on the ray, with
+// their update entries and local occlusions. Neighbouring pixels' rays mostly
+// cross the same voxels at the same positions, and those skip the hash table
+// and the neighbour look-ups.
+struct CachedVoxel {
+  VoxelIndex index;
+  std::uint32_t entry;
+  float occlusion;
+};
+
+struct RayCounters {
+  std::size_t voxel_visits = 0;
+  std::size_t cache_hits = 0;
+  std::size_t rays_invisible = 0;
+};
+
+struct FrameContext {
+  const VisibilityStereoConfig& config;
+  const NormalCdfTable& phi;
+  Eigen::Vector3d origin;
+  VoxelIndex origin_voxel;
+  double resolution;
+};
+
+class RayCaster {
+ public:
+  RayCaster(const FrameContext& frame, MapSnapshot* snapshot, FrameUpdates* updates)
+      : frame_(frame), snapshot_(snapshot), updates_(updates) {}
+
+  void cast(const Eigen::Vector3d& point, double range_sigma) {
+    current_.clear();
+    if (frame_.config.method == StereoIntegrationMethod::kOctomap) {
+      castOctomap(point);
+    } else {
+      castVisibility(point, range_sigma);
+    }
+    std::swap(previous_, current_);
+  }
+  const RayCounters& counters() const { return counters_; }
+
+ private:
+  // The voxel at position j of the current ray, through the cache when the
+  // previous ray had the same voxel there.
+  const CachedVoxel& lookUp(const VoxelIndex& index, std::size_t j, bool need_occlusion) {
+    ++counters_.voxel_visits;
+    if (j < previous_.size() && previous_[j].index == index) {
+      ++counters_.cache_hits;
+      current_.push_back(previous_[j]);
+    } else {
+      const std::uint32_t entry = updates_->findOrInsert(index, frame_.origin_voxel);
+      const float occlusion =
+          need_occlusion ? static_cast<float>(localOcclusion(index, frame_.origin_voxel, snapshot_))
+                         : 0.0f;
+      current_.push_back({index, entry, occlusion});
+    }
+    return current_.back();
+  }
+
+  // OctoMap's rays: misses up to the end voxel, a hit in it (as
+  // PointCloudIntegrator).
+  void castOctomap(const Eigen::Vector3d& point) {
+    RayTraversal ray(frame_.origin, point, frame_.resolution);
+    for (std::size_t j = 0;; ++j) {
+      const bool at_end = ray.atEnd();
+      updates_->reduce(lookUp(ray.current(), j, false).entry, at_end ? 1.0f : 0.0f, 1.0f);
+      if (at_end) return;
+      ray.stepTowardsEnd();
+    }
+  }
+
+  // Eq. 1-3 and 8 along one ray.
+  void castVisibility(const Eigen::Vector3d& point, double range_sigma) {
+    const FrameContext& f = frame_;
+    const Eigen::Vector3d offset = point - f.origin;
+    const double range = offset.norm();
+    const Eigen::Vector3d direction = offset / range;
+    RayTraversal ray(f.origin, point, f.resolution);
+    // The walk ends where P(I_v) reaches the stop value, at the latest ~2.4
+    // sigma past the point; the bound only guards against rounding.
+    const std::size_t max_steps =
+        static_cast<std::size_t>(3 * (range + 6.0 * range_sigma) / f.resolution + 8);
+    double visibility = 1.0;
+    for (std::size_t j = 0; j < max_steps; ++j) {
+      const CachedVoxel& voxel = lookUp(ray.current(), j, true);
+      visibility = nextVisibility(visibility, voxel.occlusion, f.config);  // Eq. 3
+      if (visibility < f.config.visibility_min) {
+        ++counters_.rays_invisible;
+        return;
+      }
+      // P(I_v): the voxel reduced to its centre, at distance s along the ray
+      // (Sec. III-C).
+      const Eigen::Vector3d center = (voxel.index.cast<double>().array() + 0.5) * f.resolution;
+      const double s = (center - f.origin).dot(direction);
+      double p_inside =
+          range_sigma > 0 ? f.phi((s - range) / range_sigma) : (s >= range ? 1.0 : 0.0);
+      const bool stop = p_inside >= f.config.inside_stop_probability;
+      if (stop) p_inside = 1.0;  // the one further voxel with a full hit (Sec. III-C)
+      updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
+      if (stop) return;
+      ray.next();
+    }
+  }
+
+  const FrameContext& frame_;
+  MapSnapshot* snapshot_;
+  FrameUpdates* updates_;
+  std::vector<CachedVoxel> previous_;
+  std::vector<CachedVoxel> current_;
+  RayCounters counters_;
+};
+
+bool isUsable(const Eigen::Vector3d& point, const Eigen::Vector3d& origin, double resolution,
+              double max_range, bool needs_direction) {
+  if (!point.allFinite()) return false;
+  const double range = (point - origin).norm();
+  if (needs_direction && !(range > 0)) return false;  // the walk past the point needs a direction
+  if (max_range >= 0 && range > max_range) return false;
+  // Keys hold 2^20 voxels each way; the walk may continue a few sigma past the
+  // point.
+  const double limit = 0.5 * kMaxOffset * resolution;
+  return ((point - origin).array().abs() < limit).all();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// VisibilityStereoIntegrator
+
+VisibilityStereoIntegrator::VisibilityStereoIntegrator(const VisibilityStereoConfig& config)
+    : config_(config) {
+  config_.validate();
+}
+
+StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
+    const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
+    const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
+    std::vector<StereoVoxelUpdate>* updates) const {
+  if (range_sigmas.size() != points_in_map.size()) {
+    throw std::invalid_argument("range_sigmas must have one entry per point");
+  }
+  updates->clear();
+  StereoIntegrationStats stats;
+  stats.points = points_in_map.size();
+  if (!map.isInRange(sensor_origin)) {
+    stats.skipped_points = stats.points;
+    return stats;
+  }
+  const double resolution = map.resolution();
+  const FrameContext frame{config_, phi_, sensor_origin, map.indexOf(sensor_origin), resolution};
+  // logit(0) = -inf and logit(1) = +inf order correctly in Eq. 1's minimum.
+  const float unknown_log_odds = logit(config_.unknown_neighbour_occupancy);
+  const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
+  const int count = static_cast<int>(points_in_map.size());
+  const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
+  std::vector<FrameUpdates> per_thread(threads);
+  std::size_t skipped = 0, visits = 0, hits = 0, invisible = 0;
+#pragma omp parallel num_threads(threads) reduction(+ : skipped, visits, hits, invisible)
+  {
+    MapSnapshot snapshot(map, unknown_log_odds);
+    RayCaster caster(frame, &snapshot, &per_thread[omp_get_thread_num()]);
+    // Chunks of neighbouring pixels keep the previous-ray cache useful on every
+    // thread.
+#pragma omp for schedule(dynamic, 512)
+    for (int i = 0; i < count; ++i) {
+      const Eigen::Vector3d point = points_in_map[i].cast<double>();
+      const double sigma = range_sigmas[i];
+      if (!isUsable(point, sensor_origin, resolution, config_.max_range, visibility_mode) ||
+          !(std::isfinite(sigma) && sigma >= 0)) {
+        ++skipped;
+        continue;
+      }
+      caster.cast(point, sigma);
+    }
+    visits += caster.counters().voxel_visits;
+    hits += caster.counters().cache_hits;
+    invisible += caster.counters().rays_invisible;
+  }
+  for (int t = 1; t < threads; ++t) per_thread[0].merge(per_thread[t], frame.origin_voxel);
+  *updates = std::move(per_thread[0].entries());
+  // A voxel looked up where the visibility fell below q_min was entered but never updated.
+  updates->erase(std::remove_if(updates->begin(), updates->end(),
+                                [](const StereoVoxelUpdate& u) { return !(u.visibility > 0); }),
+                 updates->end());
+  stats.skipped_points = skipped;
+  stats.rays = stats.points - skipped;
+  stats.voxel_visits = visits;
+  stats.cache_hits = hits;
+  stats.rays_invisible = invisible;
+  stats.updated_voxels = updates->size();
+  return stats;
+}
+
+void VisibilityStereoIntegrator::apply(const std::vector<StereoVoxelUpdate>& updates,
+                                       VoxelMap* map) const {
+  // Group the updates by block so that each block is written by one thread.
+  tsl::robin_map<std::uint64_t, std::vector<std::uint32_t>, KeyHash> by_block;
+  std::vector<BlockIndex> blocks;
+  for (std::uint32_t i = 0; i < updates.size(); ++i) {
+    const BlockIndex block = VoxelMap::blockOf(updates[i].index);
+    auto [it, inserted] = by_block.try_emplace(blockKey(block));
+    if (inserted) blocks.push_back(block);
+    it.value().push_back(i);
+  }
+  const float min_log_odds = map->minLogOdds();
+  const float max_log_odds = map->maxLogOdds();
+  const bool octomap = config_.method == StereoIntegrationMethod::kOctomap;
+  const float hit = map->model().hitLogOdds();
+  const float miss = map->model().missLogOdds();
+  map->updateBlocks(blocks, [&](const BlockIndex& block_index, VoxelBlock& block) {
+    for (std::uint32_t i : by_block.find(blockKey(block_index))->second) {
+      const StereoVoxelUpdate& update = updates[i];
+      const int linear = VoxelMap::linearIndexInBlock(update.index);
+      if (octomap) {
+        block.update(linear, update.p_inside >= 1.0f ? hit : miss, min_log_odds, max_log_odds);
+        continue;
+      }
+      const float old_value = block.log_odds[linear];
+      const double p_old = VoxelBlock::isKnown(old_value) ? probabilityFromLogOdds(old_value)
+                                                          : config_.unknown_occupancy;
+      const double p_new =
+          occupancyAfterInterpolatedMeasurement(p_old, update.p_inside, update.visibility, config_);
+      // Clamped like OctoMap, to the map's [clamp_min, clamp_max].
+      block.set(linear, std::clamp(logit(p_new), min_log_odds, max_log_odds));
+    }
+  });
+}
+
+StereoIntegrationStats VisibilityStereoIntegrator::integrate(
+    const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
+    const Eigen::Vector3d& sensor_origin, VoxelMap* map) const {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<StereoVoxelUpdate> updates;
+  StereoIntegrationStats stats =
+      computeUpdates(points_in_map, range_sigmas, sensor_origin, *map, &updates);
+  if (!updates.empty()) {
+    map->setFocus(sensor_origin);
+    apply(updates, map);
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& disparity,
+                                                      const StereoCamera& camera,
+                                                      const Eigen::Isometry3d& T_map_camera,
+                                                      std::vector<Eigen::Vector3f>* points_in_map,
+                                                      std::vector<float>* range_sigmas,
+                                                      std::size_t* pixels_read) const {
+  const StereoPoints camera_points = disparityToPoints(disparity, camera, config_.disparity);
+  const Eigen::Isometry3f transform = T_map_camera.cast<float>();
+  points_in_map->resize(camera_points.size());
+  range_sigmas->resize(camera_points.size());
+  for (std::size_t i = 0; i < camera_points.size(); ++i) {
+    const Eigen::Vector3f& p = camera_points.points[i];
+    (*points_in_map)[i] = transform * p;
+    // sigma_z is along the optical axis; along the ray it grows by range / z.
+    (*range_sigmas)[i] = camera_points.depth_sigmas[i] * p.norm() / p.z();
+  }
+  if (pixels_read != nullptr) *pixels_read = camera_points.pixels_read;
+}
+
+StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImageView& disparity,
+                                                             const StereoCamera& camera,
+                                                             const Eigen::Isometry3d& T_map_camera,
+                                                             VoxelMap* map) const {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> sigmas;
+  disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr);
+  StereoIntegrationStats stats = integrate(points, sigmas, T_map_camera.translation(), map);
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+}  // namespace occupancy_fusion

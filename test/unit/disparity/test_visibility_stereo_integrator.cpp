@@ -1,0 +1,352 @@
+// The visibility-aware stereo integrator: Eq. 1-8 by hand, on hand-built maps, and the OctoMap
+// mode against the OctoMap-equivalent point-cloud integrator.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+
+namespace occupancy_fusion {
+namespace {
+
+const VisibilityStereoConfig kTableI;  // the defaults are Table I's values
+
+double logOddsOf(double p) { return std::log(p / (1 - p)); }
+
+TEST(VisibilityEquationsTest, NormalCdfTableMatchesErfc) {
+  const NormalCdfTable phi;
+  double worst = 0;
+  for (double x = -7.0; x <= 7.0; x += 0.001) {
+    worst = std::max(worst, std::abs(phi(x) - 0.5 * std::erfc(-x / std::sqrt(2.0))));
+  }
+  EXPECT_LT(worst, 2e-6);
+  EXPECT_DOUBLE_EQ(phi(0.0), 0.5);
+}
+
+TEST(VisibilityEquationsTest, Equation3WithQmaxClamp) {
+  // P(V_i) = P(V_i-1) (0.2 P(C) + 1.0 (1 - P(C))).
+  EXPECT_NEAR(nextVisibility(1.0, 0.5, kTableI), 0.6, 1e-12);
+  EXPECT_NEAR(nextVisibility(0.6, 0.5, kTableI), 0.36, 1e-12);
+  EXPECT_NEAR(nextVisibility(0.5, 0.0, kTableI), 0.5, 1e-12);
+  // 1 - 0.8 * 0.2 = 0.84 >= q_max = 0.7 counts as fully visible.
+  EXPECT_EQ(nextVisibility(1.0, 0.2, kTableI), 1.0);
+  EXPECT_NEAR(nextVisibility(1.0, 0.971, kTableI), 1 - 0.8 * 0.971, 1e-12);
+}
+
+TEST(VisibilityEquationsTest, Equations4To6ByHand) {
+  // Visible hit at P(O) = 0.5: 0.55 * 0.5 / (0.55 * 0.5 + 0.43 * 0.5) = 0.55 / 0.98.
+  EXPECT_NEAR(occupancyAfterMeasurement(0.5, true, 1.0, kTableI), 0.55 / 0.98, 1e-12);
+  // Visible miss at 0.3: 0.45 * 0.3 / (0.45 * 0.3 + 0.57 * 0.7) = 0.135 / 0.534.
+  EXPECT_NEAR(occupancyAfterMeasurement(0.3, false, 1.0, kTableI), 0.135 / 0.534, 1e-12);
+  // Half visible hit at 0.5: P(H|O) = 0.05 * 0.5 + 0.55 * 0.5 = 0.3,
+  // P(H) = 0.025 + 0.5 (0.55 * 0.5 + 0.43 * 0.5) = 0.27, P(O|H) = 0.15 / 0.27.
+  EXPECT_NEAR(occupancyAfterMeasurement(0.5, true, 0.5, kTableI), 0.15 / 0.27, 1e-12);
+  // Visibility 0.6 miss at 0.5: P(~H|O) = 0.95 * 0.4 + 0.45 * 0.6 = 0.65,
+  // P(~H) = 0.38 + 0.6 (0.225 + 0.285) = 0.686.
+  EXPECT_NEAR(occupancyAfterMeasurement(0.5, false, 0.6, kTableI), 0.325 / 0.686, 1e-12);
+  // Invisible: no information either way.
+  EXPECT_NEAR(occupancyAfterMeasurement(0.8, true, 0.0, kTableI), 0.8, 1e-12);
+  EXPECT_NEAR(occupancyAfterMeasurement(0.8, false, 0.0, kTableI), 0.8, 1e-12);
+  // Eq. 8 at P(I) = 0.25: 0.25 * 0.55 / 0.98 + 0.75 * 0.45 / 1.02.
+  EXPECT_NEAR(occupancyAfterInterpolatedMeasurement(0.5, 0.25, 1.0, kTableI),
+              0.25 * 0.55 / 0.98 + 0.75 * 0.45 / 1.02, 1e-12);
+}
+
+TEST(VisibilityEquationsTest, FullVisibilityIsALogOddsSum) {
+  // At P(V) = 1, Eq. 4-6 reduce to OctoMap's log-odds update with the hit and miss log-odds
+  // log(0.55 / 0.43) and log(0.45 / 0.57).
+  for (double p : {0.12, 0.3, 0.5, 0.8, 0.97}) {
+    EXPECT_NEAR(logOddsOf(occupancyAfterMeasurement(p, true, 1.0, kTableI)),
+                logOddsOf(p) + std::log(0.55 / 0.43), 1e-9);
+    EXPECT_NEAR(logOddsOf(occupancyAfterMeasurement(p, false, 1.0, kTableI)),
+                logOddsOf(p) + std::log(0.45 / 0.57), 1e-9);
+  }
+}
+
+TEST(VisibilityEquationsTest, ValidationNamesTheField) {
+  VisibilityStereoConfig config;
+  config.visibility_min = 0.8;  // above q_max
+  try {
+    config.validate();
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("visibility_min"), std::string::npos);
+  }
+  config = VisibilityStereoConfig();
+  config.prob_hit_visible_free = 0.6;
+  EXPECT_THROW(VisibilityStereoIntegrator{config}, std::invalid_argument);
+  EXPECT_EQ(stereoIntegrationMethodFromString("octomap"), StereoIntegrationMethod::kOctomap);
+  EXPECT_THROW(stereoIntegrationMethodFromString("bayes"), std::invalid_argument);
+}
+
+// A ray along +x through voxels (k, 0, 0) of a 0.1 m map, from the centre of voxel 0 to a point
+// in voxel 15. The ray stays in the sensor's y and z slabs, so each voxel's only sensor-facing
+// neighbour is (k - 1, 0, 0) (Eq. 1).
+constexpr double kRes = 0.1;
+const Eigen::Vector3d kOrigin(0.05, 0.05, 0.05);
+const Eigen::Vector3f kPoint(1.52f, 0.05f, 0.05f);
+constexpr float kTinySigma = 1e-4f;
+
+VoxelMapConfig mapConfig() {
+  VoxelMapConfig config;
+  config.resolution = kRes;
+  return config;
+}
+
+double probabilityAt(const VoxelMap& map, int k) {
+  const auto value = map.logOdds(VoxelIndex(k, 0, 0));
+  return value ? probabilityFromLogOdds(*value) : -1.0;  // -1: unknown
+}
+
+void integrateOnePoint(const VisibilityStereoConfig& config, VoxelMap* map) {
+  VisibilityStereoIntegrator(config).integrate({kPoint}, {kTinySigma}, kOrigin, map);
+}
+
+// Known free space (P(O) = 0.3) along the ray, optionally with an occupied wall at x = 10, 11.
+void fillFreeCorridor(bool wall, VoxelMap* map_pointer) {
+  VoxelMap& map = *map_pointer;
+  for (int k = 0; k <= 17; ++k) map.setLogOdds(VoxelIndex(k, 0, 0), logit(0.3));
+  if (wall) {
+    for (int k : {10, 11}) map.setLogOdds(VoxelIndex(k, 0, 0), map.maxLogOdds());
+  }
+}
+
+TEST(VisibilityStereoIntegratorTest, FreeMapEverythingVisible) {
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(false, &map);
+  integrateOnePoint(kTableI, &map);
+  // P(C) = 0.3 gives 1 - 0.8 * 0.3 = 0.76 >= q_max: all visible. Voxels 0..14 lie before the
+  // point (their centres at s < 1.47 m along the ray): visible misses, 0.135 / 0.534.
+  for (int k = 0; k <= 14; ++k) EXPECT_NEAR(probabilityAt(map, k), 0.135 / 0.534, 1e-6) << k;
+  // Voxel 15's centre is past the point by 0.03 m = 300 sigma: P(I) = 1, the full hit, and the
+  // ray stops: 0.55 * 0.3 / (0.165 + 0.43 * 0.7).
+  EXPECT_NEAR(probabilityAt(map, 15), 0.165 / 0.466, 1e-6);
+  EXPECT_NEAR(probabilityAt(map, 16), 0.3, 1e-6);
+}
+
+TEST(VisibilityStereoIntegratorTest, KnownWallHidesTheVoxelsBehindIt) {
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(true, &map);
+  integrateOnePoint(kTableI, &map);
+  for (int k = 0; k <= 9; ++k) EXPECT_NEAR(probabilityAt(map, k), 0.135 / 0.534, 1e-6) << k;
+  // Voxel 10 (the wall's face) is visible: a miss at P(O) = clamp_max.
+  const double wall = probabilityFromLogOdds(map.maxLogOdds());
+  EXPECT_NEAR(probabilityAt(map, 10), 0.45 * wall / (0.45 * wall + 0.57 * (1 - wall)), 1e-5);
+  // Voxel 11 sits behind an occupied voxel: V = 1 - 0.8 * clamp_max = 0.2232, a weak miss.
+  const double v11 = 1 - 0.8 * wall;
+  EXPECT_NEAR(probabilityAt(map, 11), occupancyAfterMeasurement(wall, false, v11, kTableI), 1e-5);
+  // Voxel 12: V = 0.2232^2 < q_min, the ray stops. The measurement at voxel 15 changes nothing.
+  for (int k = 12; k <= 17; ++k) EXPECT_NEAR(probabilityAt(map, k), 0.3, 1e-6) << k;
+
+  // OctoMap's update on the same ray clears the wall and marks voxel 15 occupied.
+  VoxelMap octomap(mapConfig());
+  fillFreeCorridor(true, &octomap);
+  VisibilityStereoConfig octomap_config;
+  octomap_config.method = StereoIntegrationMethod::kOctomap;
+  integrateOnePoint(octomap_config, &octomap);
+  // logit(0.3) + logit(0.7) = 0: the hit raised voxel 15 from 0.3 to 0.5.
+  EXPECT_NEAR(probabilityAt(octomap, 15), 0.5, 1e-6);
+  EXPECT_LT(probabilityAt(octomap, 11), probabilityFromLogOdds(octomap.maxLogOdds()));
+}
+
+TEST(VisibilityStereoIntegratorTest, UnknownMapIsMappedAFewVoxelsPerFrame) {
+  // Unknown voxels count as P(O) = 0.5 (Eq. 1): V = 1 (the sensor's voxel has no facing
+  // neighbour), 0.6, 0.36, 0.216, 0.1296, then 0.078 < q_min stops the ray: 5 voxels.
+  VoxelMap map(mapConfig());
+  VisibilityStereoIntegrator integrator(kTableI);
+  const StereoIntegrationStats stats = integrator.integrate({kPoint}, {kTinySigma}, kOrigin, &map);
+  EXPECT_EQ(stats.rays_invisible, 1u);
+  EXPECT_EQ(stats.updated_voxels, 5u);
+  EXPECT_EQ(map.knownVoxelCount(), 5u);
+  EXPECT_NEAR(probabilityAt(map, 0), 0.45 / 1.02, 1e-6);
+  EXPECT_NEAR(probabilityAt(map, 1), 0.325 / 0.686, 1e-6);
+  EXPECT_NEAR(probabilityAt(map, 4), occupancyAfterMeasurement(0.5, false, 0.1296, kTableI), 1e-6);
+  EXPECT_EQ(probabilityAt(map, 5), -1.0);
+  // Repeating the frame pushes the frontier out (Fig. 5a): after enough frames the hit lands.
+  int frames = 1;
+  while (probabilityAt(map, 15) <= 0.5 && frames < 100) {
+    integrator.integrate({kPoint}, {kTinySigma}, kOrigin, &map);
+    ++frames;
+  }
+  EXPECT_GT(frames, 3);
+  EXPECT_LT(frames, 100);
+}
+
+TEST(VisibilityStereoIntegratorTest, DepthErrorSpreadsTheHitPastThePoint) {
+  // sigma = 0.1 m: voxel 14's centre lies 0.07 m before the point (P(I) = Phi(-0.7)), voxel 15
+  // 0.03 m past it (Phi(0.3)), ... until Phi(x) >= 0.99 (x >= 2.33: voxel 38 - no, 17 at
+  // x = 2.3 < 2.33, so voxel 18 at x = 3.3), which gets the full hit.
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(false, &map);
+  for (int k = 18; k <= 20; ++k) map.setLogOdds(VoxelIndex(k, 0, 0), logit(0.3));
+  VisibilityStereoIntegrator(kTableI).integrate({kPoint}, {0.1f}, kOrigin, &map);
+  const NormalCdfTable phi;
+  for (int k : {13, 14, 15, 16, 17}) {
+    const double x = ((k + 0.5) * kRes - 0.05 - 1.47) / 0.1;
+    EXPECT_NEAR(probabilityAt(map, k),
+                occupancyAfterInterpolatedMeasurement(0.3, phi(x), 1.0, kTableI), 1e-5)
+        << k;
+  }
+  EXPECT_NEAR(probabilityAt(map, 18), 0.165 / 0.466, 1e-6);
+  EXPECT_NEAR(probabilityAt(map, 19), 0.3, 1e-6);
+}
+
+// Random rays through a map with scattered occupied voxels.
+struct RandomFrame {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> sigmas;
+};
+
+RandomFrame randomFrame(int count, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> lateral(-1.0f, 1.0f), depth(1.0f, 3.0f), sigma(0.0f, 0.2f);
+  RandomFrame frame;
+  for (int i = 0; i < count; ++i) {
+    frame.points.emplace_back(depth(random), lateral(random), 0.5f * lateral(random));
+    frame.sigmas.push_back(sigma(random));
+  }
+  return frame;
+}
+
+void scatter(unsigned seed, VoxelMap* map_pointer) {
+  VoxelMap& map = *map_pointer;
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> x(0, 30), y(-10, 10), z(-5, 5);
+  std::uniform_real_distribution<double> p(0.05, 0.95);
+  for (int i = 0; i < 3000; ++i)
+    map.setLogOdds(VoxelIndex(x(random), y(random), z(random)), logit(p(random)));
+}
+
+using UpdateTable = std::map<std::tuple<int, int, int>, std::pair<float, float>>;
+UpdateTable asTable(const std::vector<StereoVoxelUpdate>& updates) {
+  UpdateTable table;
+  for (const StereoVoxelUpdate& u : updates) {
+    const auto key = std::make_tuple(u.index.x(), u.index.y(), u.index.z());
+    EXPECT_EQ(table.count(key), 0u) << "one update per voxel";
+    table[key] = {u.p_inside, u.visibility};
+  }
+  return table;
+}
+
+TEST(VisibilityStereoIntegratorTest, OneUpdatePerVoxelTakesTheLargestInsideAndVisibility) {
+  // Our choice where several rays reach a voxel in one frame: the largest P(I_v) (a hit wins, as
+  // in OctoMap) and the largest P(V_v) (a voxel is visible if any ray sees it). Checked against
+  // each ray cast on its own.
+  VoxelMap map(mapConfig());
+  scatter(3, &map);
+  const RandomFrame frame = randomFrame(60, 4);
+  const VisibilityStereoIntegrator integrator(kTableI);
+  std::vector<StereoVoxelUpdate> updates;
+  integrator.computeUpdates(frame.points, frame.sigmas, kOrigin, map, &updates);
+  const UpdateTable together = asTable(updates);
+  UpdateTable expected;
+  for (std::size_t i = 0; i < frame.points.size(); ++i) {
+    integrator.computeUpdates({frame.points[i]}, {frame.sigmas[i]}, kOrigin, map, &updates);
+    for (const auto& [key, values] : asTable(updates)) {
+      auto [it, inserted] = expected.try_emplace(key, values);
+      it->second.first = std::max(it->second.first, values.first);
+      it->second.second = std::max(it->second.second, values.second);
+    }
+  }
+  ASSERT_EQ(together.size(), expected.size());
+  int different_visibilities = 0;
+  for (const auto& [key, values] : expected) {
+    ASSERT_EQ(together.count(key), 1u);
+    EXPECT_FLOAT_EQ(together.at(key).first, values.first);
+    EXPECT_FLOAT_EQ(together.at(key).second, values.second);
+    different_visibilities += values.second < 1.0f ? 1 : 0;
+  }
+  EXPECT_GT(different_visibilities, 10);  // the map does occlude some of them
+}
+
+TEST(VisibilityStereoIntegratorTest, CacheDoesNotChangeTheResult) {
+  // The previous-ray cache only skips look-ups: shuffling the rays (other cache hits) gives the
+  // same updates.
+  VoxelMap map(mapConfig());
+  scatter(5, &map);
+  RandomFrame frame = randomFrame(2000, 6);
+  std::vector<std::size_t> order(frame.points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  // Sorting by direction makes neighbouring rays alike, as neighbouring pixels are.
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return std::atan2(frame.points[a].y(), frame.points[a].x()) <
+           std::atan2(frame.points[b].y(), frame.points[b].x());
+  });
+  RandomFrame sorted;
+  for (std::size_t i : order) {
+    sorted.points.push_back(frame.points[i]);
+    sorted.sigmas.push_back(frame.sigmas[i]);
+  }
+  const VisibilityStereoIntegrator integrator(kTableI);
+  std::vector<StereoVoxelUpdate> a, b;
+  const StereoIntegrationStats random_stats =
+      integrator.computeUpdates(frame.points, frame.sigmas, kOrigin, map, &a);
+  const StereoIntegrationStats sorted_stats =
+      integrator.computeUpdates(sorted.points, sorted.sigmas, kOrigin, map, &b);
+  EXPECT_EQ(asTable(a), asTable(b));
+  EXPECT_GT(sorted_stats.cacheHitRate(), random_stats.cacheHitRate());
+  EXPECT_GT(sorted_stats.cacheHitRate(), 0.3);
+  EXPECT_LE(sorted_stats.cache_hits, sorted_stats.voxel_visits);
+}
+
+TEST(VisibilityStereoIntegratorTest, OctomapModeEqualsPointCloudIntegrator) {
+  VisibilityStereoConfig config;
+  config.method = StereoIntegrationMethod::kOctomap;
+  const VisibilityStereoIntegrator stereo(config);
+  const PointCloudIntegrator cloud;
+  VoxelMap ours(mapConfig());
+  VoxelMap reference(mapConfig());
+  for (unsigned frame = 0; frame < 3; ++frame) {
+    const RandomFrame points = randomFrame(3000, 10 + frame);
+    const Eigen::Vector3d origin(0.03 * frame, -0.02 * frame, 0.01);
+    stereo.integrate(points.points, points.sigmas, origin, &ours);
+    cloud.integrate(points.points, origin, &reference);
+  }
+  ASSERT_EQ(ours.knownVoxelCount(), reference.knownVoxelCount());
+  std::size_t compared = 0;
+  reference.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    const auto mine = ours.logOdds(index);
+    ASSERT_TRUE(mine.has_value());
+    EXPECT_FLOAT_EQ(*mine, value);
+    ++compared;
+  });
+  EXPECT_GT(compared, 1000u);
+}
+
+TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointForm) {
+  // 3 x 1 image seen from a camera at (0.05, 0.05, 0.05) looking along map +x.
+  const std::vector<float> disparity = {10.0f, 20.0f, 40.0f};
+  const DisparityImageView view{3, 1, disparity.data(), 0};
+  const StereoCamera camera{100.0, 100.0, 1.0, 0.0, 0.2};
+  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
+  T_map_camera.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;  // optical z -> map x
+  T_map_camera.translation() = kOrigin;
+  VisibilityStereoIntegrator integrator(kTableI);
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> sigmas;
+  integrator.disparityToMapPoints(view, camera, T_map_camera, &points, &sigmas, nullptr);
+  ASSERT_EQ(points.size(), 3u);
+  // Pixel (1, 0), d = 20: z = 1 m straight ahead, sigma_z = 0.5 / 20 * 1 = 0.025.
+  EXPECT_TRUE(points[1].isApprox(Eigen::Vector3f(1.05f, 0.05f, 0.05f), 1e-6f));
+  EXPECT_NEAR(sigmas[1], 0.025, 1e-7);
+  // Pixel (0, 0), d = 10: z = 2, x = -0.02, the ray is longer than z by |(-0.01, 0, 1)|.
+  EXPECT_NEAR(sigmas[0], 0.1 * std::sqrt(1.0001), 1e-7);
+  VoxelMap from_image(mapConfig());
+  VoxelMap from_points(mapConfig());
+  integrator.integrate(view, camera, T_map_camera, &from_image);
+  integrator.integrate(points, sigmas, kOrigin, &from_points);
+  EXPECT_EQ(from_image.knownVoxelCount(), from_points.knownVoxelCount());
+  from_points.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    EXPECT_EQ(from_image.logOdds(index), std::optional<float>(value));
+  });
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
