@@ -28,7 +28,8 @@
 
 namespace occupancy_fusion {
 
-int runDepth(const CommandLine& args);  // benchmark_depth.cpp
+int runPublish(const CommandLine& args);  // benchmark_publish.cpp
+int runDepth(const CommandLine& args);    // benchmark_depth.cpp
 
 namespace {
 
@@ -208,6 +209,12 @@ const std::vector<Workload>& workloads() {
        "      our voxel map and into octomap::OcTree::insertPointCloud; ratios are ours / octomap",
        {"resolution", "points", "clouds", "repetitions", "max_range"},
        runPointCloud},
+      {"publish",
+       "[--known_voxels K[,K...]] [--changed_blocks B[,B...]] [--repetitions N] [--resolution R]\n"
+       "      MapServer's incremental refresh (occupied-voxel cache, fused 2D view) after B\n"
+       "      blocks change in a synthetic map of K known voxels, vs rebuilding from the whole map",
+       {"known_voxels", "changed_blocks", "repetitions", "resolution"},
+       runPublish},
       {"depth",
        "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--k K] "
        "[--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal]\n"
