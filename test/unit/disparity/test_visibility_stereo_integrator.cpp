@@ -180,9 +180,9 @@ TEST(VisibilityStereoIntegratorTest, UnknownMapIsMappedAFewVoxelsPerFrame) {
 }
 
 TEST(VisibilityStereoIntegratorTest, DepthErrorSpreadsTheHitPastThePoint) {
-  // sigma = 0.1 m: voxel 14's centre lies 0.07 m before the point (P(I) = Phi(-0.7)), voxel 15
-  // 0.03 m past it (Phi(0.3)), ... until Phi(x) >= 0.99 (x >= 2.33: voxel 38 - no, 17 at
-  // x = 2.3 < 2.33, so voxel 18 at x = 3.3), which gets the full hit.
+  // sigma = 0.1 m: voxel k's centre lies at x = ((k + 0.5) 0.1 - 0.05 - 1.47) / 0.1 sigmas past
+  // the point, P(I) = Phi(x): voxel 14 at -0.7, 15 at 0.3, ..., 17 at 2.3 (Phi = 0.989 < 0.99).
+  // Voxel 18 (x = 3.3) is the first at or above 0.99: it gets the full hit and the ray stops.
   VoxelMap map(mapConfig());
   fillFreeCorridor(false, &map);
   for (int k = 18; k <= 20; ++k) map.setLogOdds(VoxelIndex(k, 0, 0), logit(0.3));
