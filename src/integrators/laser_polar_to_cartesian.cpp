@@ -51,6 +51,15 @@ double cellCentre(int origin, int i, double resolution) {
   return (origin + i + 0.5) * resolution;
 }
 
+// The farthest range any beam observed (m): cells farther away get nothing,
+// whatever the method.
+double observedReach(const PolarField &field) {
+  int cells = 0;
+  for (int observed : field.observed_cells)
+    cells = std::max(cells, observed);
+  return cells * field.range_resolution;
+}
+
 } // namespace
 
 const char *methodName(PolarToCartesianMethod method) {
@@ -169,7 +178,7 @@ void projectSampling(const PolarField &field, const Pose2D &sensor,
   }
   const PolarLocator locator(field, sensor);
   const double res = raster->resolution;
-  const double reach = field.cells * field.range_resolution + res;
+  const double reach = observedReach(field) + res;
   const double polar_area =
       field.range_resolution * field.angle_increment; // times rho
 #pragma omp parallel for schedule(dynamic, 8)
@@ -177,7 +186,10 @@ void projectSampling(const PolarField &field, const Pose2D &sensor,
     const double cy = cellCentre(raster->origin_cell.y(), y, res);
     for (int x = 0; x < raster->width; ++x) {
       const double cx = cellCentre(raster->origin_cell.x(), x, res);
-      const double range = std::hypot(cx - sensor.x, cy - sensor.y);
+      if (std::abs(cx - sensor.x) > reach || std::abs(cy - sensor.y) > reach)
+        continue;
+      const double range = std::sqrt((cx - sensor.x) * (cx - sensor.x) +
+                                     (cy - sensor.y) * (cy - sensor.y));
       if (range > reach)
         continue;
       const double ns =
@@ -389,15 +401,20 @@ void projectMipmap(const PolarField &field, const Pose2D &sensor,
                                    : 0.0f;
   const double angular_footprint =
       res / field.angle_increment; // beams spanned, times range
+  const double reach = observedReach(field) + res;
 
 #pragma omp parallel for schedule(dynamic, 8)
   for (int y = 0; y < raster->height; ++y) {
     const double cy = cellCentre(raster->origin_cell.y(), y, res);
     for (int x = 0; x < raster->width; ++x) {
       const double cx = cellCentre(raster->origin_cell.x(), x, res);
+      if (std::abs(cx - sensor.x) > reach || std::abs(cy - sensor.y) > reach)
+        continue;
       double u = 0.0;
       double v = 0.0;
       const double range = locator.locate(cx, cy, &u, &v);
+      if (range > reach)
+        continue;
       if (!locator.inside(u, v))
         continue;
       float *cell =
