@@ -32,12 +32,6 @@ void VoxelUpdateSet::clear() {
   cached_ = nullptr;
 }
 
-BlockIndex VoxelUpdateSet::unpackBlock(std::uint64_t key) {
-  constexpr std::uint64_t kMask21 = (std::uint64_t{1} << 21) - 1;
-  auto field = [](std::uint64_t bits) { return static_cast<int>(bits & kMask21) - (1 << 20); };
-  return {field(key), field(key >> 21), field(key >> 42)};
-}
-
 const VoxelUpdateSet::BlockMasks* VoxelUpdateSet::find(const BlockIndex& block) const {
   const auto it = blocks_.find(packBlock(block));
   return it == blocks_.end() ? nullptr : &it->second;

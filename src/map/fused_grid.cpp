@@ -6,8 +6,6 @@
 #include <stdexcept>
 #include <string>
 
-#include <tsl/robin_set.h>
-
 namespace occupancy_fusion {
 namespace {
 
@@ -48,23 +46,6 @@ std::int8_t rasterValue(std::int8_t state) {
   return OccupancyRaster::kUnknown;
 }
 
-std::uint64_t packColumnTile(int x, int y) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32) |
-         static_cast<std::uint32_t>(y);
-}
-
-Eigen::Vector2i unpackColumnTile(std::uint64_t key) {
-  return {static_cast<std::int32_t>(static_cast<std::uint32_t>(key >> 32)),
-          static_cast<std::int32_t>(static_cast<std::uint32_t>(key & 0xffffffffULL))};
-}
-
-std::uint64_t packBlock(const BlockIndex& block) {
-  constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
-  return ((static_cast<std::uint64_t>(block.x()) & kMask) << 42) |
-         ((static_cast<std::uint64_t>(block.y()) & kMask) << 21) |
-         (static_cast<std::uint64_t>(block.z()) & kMask);
-}
-
 bool centerInBand(const VoxelMap& map, int voxel_z, const FusedGridConfig& config) {
   const double z = map.centerOf(VoxelIndex(0, 0, voxel_z)).z();
   return z >= config.min_z && z <= config.max_z;
@@ -79,8 +60,11 @@ unsigned bandMask(const VoxelMap& map, int block_z, const FusedGridConfig& confi
   return mask;
 }
 
+// Key of a column tile (x, y block coordinates) or of a single column (x, y cell coordinates).
+std::uint64_t packColumnTile(int x, int y) { return packKey(Eigen::Vector2i(x, y)); }
+
 // Sparse column states keyed by column index, for the reference.
-using ColumnStates = tsl::robin_map<std::uint64_t, std::int8_t, FusedGridView::KeyHash>;
+using ColumnStates = SpatialKeyMap<std::int8_t>;
 
 void raiseState(ColumnStates* states, int x, int y, std::int8_t state) {
   auto [it, inserted] = states->try_emplace(packColumnTile(x, y), state);
@@ -94,8 +78,8 @@ OccupancyRaster rasterFromStates(const ColumnStates& states, double resolution) 
   Eigen::Vector2i lo = Eigen::Vector2i::Constant(std::numeric_limits<int>::max());
   Eigen::Vector2i hi = Eigen::Vector2i::Constant(std::numeric_limits<int>::min());
   for (const auto& [key, state] : states) {
-    lo = lo.cwiseMin(unpackColumnTile(key));
-    hi = hi.cwiseMax(unpackColumnTile(key));
+    lo = lo.cwiseMin(unpackKey2(key));
+    hi = hi.cwiseMax(unpackKey2(key));
   }
   raster.origin_x = lo.x() * resolution;
   raster.origin_y = lo.y() * resolution;
@@ -104,7 +88,7 @@ OccupancyRaster rasterFromStates(const ColumnStates& states, double resolution) 
   raster.data.assign(static_cast<std::size_t>(raster.width) * raster.height,
                      OccupancyRaster::kUnknown);
   for (const auto& [key, state] : states) {
-    const Eigen::Vector2i cell = unpackColumnTile(key) - lo;
+    const Eigen::Vector2i cell = unpackKey2(key) - lo;
     raster.data[static_cast<std::size_t>(cell.x()) +
                 static_cast<std::size_t>(raster.width) * cell.y()] = rasterValue(state);
   }
@@ -112,17 +96,6 @@ OccupancyRaster rasterFromStates(const ColumnStates& states, double resolution) 
 }
 
 }  // namespace
-
-std::size_t FusedGridView::KeyHash::operator()(std::uint64_t key) const {
-  // splitmix64 finaliser: std::hash is the identity, and packed keys differ mostly in high bits
-  // while the table masks low bits.
-  key ^= key >> 30;
-  key *= 0xbf58476d1ce4e5b9ULL;
-  key ^= key >> 27;
-  key *= 0x94d049bb133111ebULL;
-  key ^= key >> 31;
-  return static_cast<std::size_t>(key);
-}
 
 void FusedGridConfig::validate() const {
   if (std::isnan(min_z)) throw std::invalid_argument("occupancy_min_z must be a number");
@@ -196,10 +169,10 @@ void FusedGridView::updateFromMap(const VoxelMap& map) {
     rebuildFromMap(map);
     return;
   }
-  tsl::robin_set<std::uint64_t, KeyHash> seen;
+  SpatialKeySet seen;
   for (const auto* list : {&changes.changed, &changes.removed}) {
     for (const BlockIndex& block : *list) {
-      if (seen.insert(packBlock(block)).second) refreshBlock(map, block);
+      if (seen.insert(packKey(block)).second) refreshBlock(map, block);
     }
   }
   stats_.map_blocks_processed = seen.size();
@@ -217,12 +190,12 @@ void FusedGridView::rebuildFromMap(const VoxelMap& map) {
     BlockShare share;
     if (!computeShare(map, block_index, block, &share)) return;
     applyShare(block_index, share, +1);
-    shares_.emplace(packBlock(block_index), share);
+    shares_.emplace(packKey(block_index), share);
   });
 }
 
 void FusedGridView::refreshBlock(const VoxelMap& map, const BlockIndex& block_index) {
-  const std::uint64_t key = packBlock(block_index);
+  const std::uint64_t key = packKey(block_index);
   const auto old = shares_.find(key);
   if (old != shares_.end()) {
     applyShare(block_index, old->second, -1);
@@ -285,7 +258,7 @@ void FusedGridView::updateFromLayer(const GridLayer2D* layer) {
     stats_.layer_rebuilt = true;
     layer->forEachTile([&](const TileIndex& tile, const GridTile&) { tiles.push_back(tile); });
   } else {
-    tsl::robin_set<std::uint64_t, KeyHash> seen;
+    SpatialKeySet seen;
     for (const TileIndex& tile : changes.changed) {
       if (seen.insert(packColumnTile(tile.x(), tile.y())).second) tiles.push_back(tile);
     }
@@ -372,7 +345,7 @@ OccupancyRaster FusedGridView::compose() const {
   Eigen::Vector2i lo = Eigen::Vector2i::Constant(std::numeric_limits<int>::max());
   Eigen::Vector2i hi = Eigen::Vector2i::Constant(std::numeric_limits<int>::min());
   for (const auto& [key, tile] : columns_) {
-    const Eigen::Vector2i tile_index = unpackColumnTile(key);
+    const Eigen::Vector2i tile_index = unpackKey2(key);
     for (int column = 0; column < kArea; ++column) {
       if (state_of(tile, column) == kStateUnknown) continue;
       lo = lo.cwiseMin(column_of(tile_index, column));
@@ -389,7 +362,7 @@ OccupancyRaster FusedGridView::compose() const {
   raster.data.assign(static_cast<std::size_t>(raster.width) * raster.height,
                      OccupancyRaster::kUnknown);
   for (const auto& [key, tile] : columns_) {
-    const Eigen::Vector2i tile_index = unpackColumnTile(key);
+    const Eigen::Vector2i tile_index = unpackKey2(key);
     for (int column = 0; column < kArea; ++column) {
       const std::int8_t state = state_of(tile, column);
       if (state == kStateUnknown) continue;

@@ -21,16 +21,6 @@ void GridLayer2DConfig::validate() const {
   model.validate();
 }
 
-std::size_t GridLayer2D::TileHash::operator()(std::uint64_t key) const {
-  // splitmix64 finaliser: the two packed halves must both reach the low bits the table masks.
-  key ^= key >> 30;
-  key *= 0xbf58476d1ce4e5b9ULL;
-  key ^= key >> 27;
-  key *= 0x94d049bb133111ebULL;
-  key ^= key >> 31;
-  return static_cast<std::size_t>(key);
-}
-
 GridLayer2D::GridLayer2D(const GridLayer2DConfig& config) : config_(config) {
   config_.validate();
   min_log_odds_ = config_.model.minLogOdds();
@@ -63,16 +53,6 @@ int GridLayer2D::linearIndexInTile(const CellIndex& index) {
 
 CellIndex GridLayer2D::cellIndex(const TileIndex& tile, int linear) {
   return tile * GridTile::kSide + GridTile::localIndex(linear);
-}
-
-std::uint64_t GridLayer2D::packKey(const TileIndex& tile) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(tile.x())) << 32) |
-         static_cast<std::uint32_t>(tile.y());
-}
-
-TileIndex GridLayer2D::unpackKey(std::uint64_t key) {
-  return {static_cast<std::int32_t>(static_cast<std::uint32_t>(key >> 32)),
-          static_cast<std::int32_t>(static_cast<std::uint32_t>(key & 0xffffffffULL))};
 }
 
 const GridTile* GridLayer2D::findTile(const TileIndex& tile) const {
@@ -182,7 +162,7 @@ std::size_t GridLayer2D::clearBox(const Eigen::Vector2d& min, const Eigen::Vecto
   const TileIndex tile_hi = tileOf(indexOf(max));
   std::size_t changed = 0;
   for (auto it = tiles_.begin(); it != tiles_.end(); ++it) {
-    const TileIndex tile_index = unpackKey(it->first);
+    const TileIndex tile_index = unpackKey2(it->first);
     if ((tile_index.array() < tile_lo.array()).any() ||
         (tile_index.array() > tile_hi.array()).any()) {
       continue;
@@ -213,7 +193,7 @@ void GridLayer2D::reset() {
 void GridLayer2D::forEachKnownCell(const CellFn& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   for (const auto& [key, tile] : tiles_) {
-    const TileIndex tile_index = unpackKey(key);
+    const TileIndex tile_index = unpackKey2(key);
     for (int linear = 0; linear < GridTile::kArea; ++linear) {
       const float value = tile->log_odds[linear];
       if (GridTile::isKnown(value)) fn(cellIndex(tile_index, linear), value);
@@ -224,7 +204,7 @@ void GridLayer2D::forEachKnownCell(const CellFn& fn) const {
 void GridLayer2D::forEachTile(
     const std::function<void(const TileIndex&, const GridTile&)>& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  for (const auto& [key, tile] : tiles_) fn(unpackKey(key), *tile);
+  for (const auto& [key, tile] : tiles_) fn(unpackKey2(key), *tile);
 }
 
 bool GridLayer2D::copyTile(const TileIndex& tile, GridTile* out) const {
@@ -270,7 +250,7 @@ std::optional<CellBox> GridLayer2D::knownBoundsLocked() const {
   std::optional<CellBox> box;
   for (const auto& [key, tile] : tiles_) {
     if (tile->known_count == 0) continue;
-    const TileIndex tile_index = unpackKey(key);
+    const TileIndex tile_index = unpackKey2(key);
     for (int linear = 0; linear < GridTile::kArea; ++linear) {
       if (!GridTile::isKnown(tile->log_odds[linear])) continue;
       const CellIndex cell = cellIndex(tile_index, linear);
@@ -315,7 +295,7 @@ GridChanges GridLayer2D::changesSince(std::uint64_t version) const {
       std::lower_bound(change_log_.begin(), change_log_.end(), version,
                        [](const ChangeEntry& entry, std::uint64_t v) { return entry.version < v; });
   for (auto it = first; it != change_log_.end(); ++it)
-    changes.changed.push_back(unpackKey(it->key));
+    changes.changed.push_back(unpackKey2(it->key));
   return changes;
 }
 

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include <tsl/robin_map.h>
+#include "occupancy_fusion/map/spatial_key.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -22,25 +22,6 @@ VoxelIndex indexOfKey(const octomap::OcTreeKey& key) {
           static_cast<int>(key[1]) - kOctomapKeyOffset,
           static_cast<int>(key[2]) - kOctomapKeyOffset};
 }
-
-// 21 bits per axis: injective over VoxelMap's block range, |block coordinate| < 2^20.
-std::uint64_t blockKey(const BlockIndex& block) {
-  return (static_cast<std::uint64_t>(block.x() & 0x1fffff) << 42) |
-         (static_cast<std::uint64_t>(block.y() & 0x1fffff) << 21) |
-         static_cast<std::uint64_t>(block.z() & 0x1fffff);
-}
-
-// splitmix64 finaliser: std::hash is the identity, and the table masks the low (z) bits.
-struct BlockKeyHash {
-  std::size_t operator()(std::uint64_t key) const {
-    key ^= key >> 30;
-    key *= 0xbf58476d1ce4e5b9ULL;
-    key ^= key >> 27;
-    key *= 0x94d049bb133111ebULL;
-    key ^= key >> 31;
-    return static_cast<std::size_t>(key);
-  }
-};
 
 // Voxel writes grouped per block, so the import allocates and fills each block once.
 struct BlockWrites {
@@ -90,11 +71,11 @@ void fromOcTree(const octomap::OcTree& tree, VoxelMap* map) {
         " m) differs from the map's (" + std::to_string(resolution) + " m)");
   }
   const int max_depth = static_cast<int>(tree.getTreeDepth());
-  tsl::robin_map<std::uint64_t, BlockWrites, BlockKeyHash> writes;
+  SpatialKeyMap<BlockWrites> writes;  // keyed by packKey(block)
   std::vector<BlockIndex> blocks;
   auto add_voxel = [&](const VoxelIndex& index, float log_odds) {
     const BlockIndex block = VoxelMap::blockOf(index);
-    auto [it, inserted] = writes.try_emplace(blockKey(block));
+    auto [it, inserted] = writes.try_emplace(packKey(block));
     if (inserted) blocks.push_back(block);
     it.value().values.emplace_back(VoxelMap::linearIndexInBlock(index), log_odds);
   };
@@ -116,7 +97,7 @@ void fromOcTree(const octomap::OcTree& tree, VoxelMap* map) {
     }
   }
   map->updateBlocks(blocks, [&](const BlockIndex& block, VoxelBlock& target) {
-    const auto found = writes.find(blockKey(block));
+    const auto found = writes.find(packKey(block));
     for (const auto& [linear, value] : found->second.values) target.set(linear, value);
   });
 }

@@ -8,10 +8,6 @@
 namespace occupancy_fusion {
 namespace {
 
-constexpr int kKeyBits = 21;
-constexpr std::uint64_t kKeyMask = (std::uint64_t{1} << kKeyBits) - 1;
-constexpr int kKeyOffset = 1 << (kKeyBits - 1);
-
 // Approximate heap cost of one hash-table slot (key, pointer, robin-hood bookkeeping) at the
 // table's typical load, used for memory accounting.
 constexpr std::size_t kTableSlotBytes = 24;
@@ -26,16 +22,6 @@ void VoxelMapConfig::validate() const {
                                 std::to_string(resolution));
   }
   model.validate();
-}
-
-std::size_t VoxelMap::BlockHash::operator()(std::uint64_t key) const {
-  // splitmix64 finaliser: packed keys differ mostly in high bits, the table masks low bits.
-  key ^= key >> 30;
-  key *= 0xbf58476d1ce4e5b9ULL;
-  key ^= key >> 27;
-  key *= 0x94d049bb133111ebULL;
-  key ^= key >> 31;
-  return static_cast<std::size_t>(key);
 }
 
 VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
@@ -71,16 +57,6 @@ int VoxelMap::linearIndexInBlock(const VoxelIndex& index) {
 
 VoxelIndex VoxelMap::voxelIndex(const BlockIndex& block, int linear) {
   return block * VoxelBlock::kSide + VoxelBlock::localIndex(linear);
-}
-
-std::uint64_t VoxelMap::packKey(const BlockIndex& block) {
-  auto field = [](int v) { return static_cast<std::uint64_t>(v + kKeyOffset) & kKeyMask; };
-  return field(block.x()) | (field(block.y()) << kKeyBits) | (field(block.z()) << (2 * kKeyBits));
-}
-
-BlockIndex VoxelMap::unpackKey(std::uint64_t key) {
-  auto field = [](std::uint64_t bits) { return static_cast<int>(bits & kKeyMask) - kKeyOffset; };
-  return {field(key), field(key >> kKeyBits), field(key >> (2 * kKeyBits))};
 }
 
 const VoxelBlock* VoxelMap::findBlock(const BlockIndex& block) const {
@@ -177,7 +153,7 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
   const BlockIndex block_hi = blockOf(hi);
   std::size_t changed = 0;
   for (auto& [key, block_ptr] : blocks_) {
-    const BlockIndex block = unpackKey(key);
+    const BlockIndex block = unpackKey3(key);
     if ((block.array() < block_lo.array()).any() || (block.array() > block_hi.array()).any()) {
       continue;
     }
@@ -220,7 +196,7 @@ void VoxelMap::enforceMemoryBound() {
   std::vector<std::pair<double, std::uint64_t>> by_distance;
   by_distance.reserve(blocks_.size());
   for (const auto& entry : blocks_) {
-    const Eigen::Vector3d center = unpackKey(entry.first).cast<double>().array() + 0.5;
+    const Eigen::Vector3d center = unpackKey3(entry.first).cast<double>().array() + 0.5;
     by_distance.emplace_back((center - focus_in_blocks).squaredNorm(), entry.first);
   }
   std::sort(by_distance.begin(), by_distance.end(),
@@ -237,7 +213,7 @@ void VoxelMap::enforceMemoryBound() {
 void VoxelMap::forEachVoxelIf(const VoxelFn& fn, int which) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   for (const auto& [key, block] : blocks_) {
-    const BlockIndex block_index = unpackKey(key);
+    const BlockIndex block_index = unpackKey3(key);
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       const float value = block->log_odds[linear];
       if (!VoxelBlock::isKnown(value)) continue;
@@ -284,7 +260,7 @@ void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::V
   }
   // A box larger than the map: walk the map's blocks instead.
   for (const auto& [key, block] : blocks_) {
-    const BlockIndex block_index = unpackKey(key);
+    const BlockIndex block_index = unpackKey3(key);
     if ((block_index.array() < block_lo.array()).any() ||
         (block_index.array() > block_hi.array()).any()) {
       continue;
@@ -317,7 +293,7 @@ VoxelCounts VoxelMap::countInBox(const Eigen::Vector3d& min, const Eigen::Vector
 void VoxelMap::forEachBlock(
     const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  for (const auto& [key, block] : blocks_) fn(unpackKey(key), *block);
+  for (const auto& [key, block] : blocks_) fn(unpackKey3(key), *block);
 }
 
 bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
@@ -341,7 +317,7 @@ MapChanges VoxelMap::changesSince(std::uint64_t version) const {
       std::lower_bound(change_log_.begin(), change_log_.end(), version,
                        [](const ChangeEntry& entry, std::uint64_t v) { return entry.version < v; });
   for (auto it = first; it != change_log_.end(); ++it) {
-    (it->removed ? changes.removed : changes.changed).push_back(unpackKey(it->key));
+    (it->removed ? changes.removed : changes.changed).push_back(unpackKey3(it->key));
   }
   return changes;
 }

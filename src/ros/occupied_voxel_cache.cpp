@@ -2,14 +2,6 @@
 
 namespace occupancy_fusion {
 
-std::uint64_t OccupiedVoxelCache::packKey(const BlockIndex& block) {
-  // 21 bits per axis cover VoxelMap's block coordinate range (|b| <= 2^20 - 1).
-  constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
-  return (static_cast<std::uint64_t>(block.x()) & kMask) |
-         ((static_cast<std::uint64_t>(block.y()) & kMask) << 21) |
-         ((static_cast<std::uint64_t>(block.z()) & kMask) << 42);
-}
-
 void OccupiedVoxelCache::dropBlock(std::uint64_t key) {
   auto found = blocks_.find(key);
   if (found == blocks_.end()) return;

@@ -10,8 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include <tsl/robin_map.h>
-
+#include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
@@ -71,23 +70,12 @@ class VoxelUpdateSet {
                [](const BlockMasks& m, int w) { return m.free[w] & ~m.occupied[w]; });
   }
 
-  // 21 bits per axis, enough for VoxelMap::kMaxBlockCoordinate.
-  static std::uint64_t packBlock(const BlockIndex& block) {
-    constexpr std::uint64_t kMask21 = (std::uint64_t{1} << 21) - 1;
-    auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & kMask21; };
-    return field(block.x()) | (field(block.y()) << 21) | (field(block.z()) << 42);
-  }
-  static BlockIndex unpackBlock(std::uint64_t key);
+  // The table's block keys (spatial_key.h's 3D encoding).
+  static std::uint64_t packBlock(const BlockIndex& block) { return packKey(block); }
+  static BlockIndex unpackBlock(std::uint64_t key) { return unpackKey3(key); }
 
  private:
-  struct KeyHash {
-    std::size_t operator()(std::uint64_t key) const {
-      // Fibonacci hashing mixes the packed x|y|z fields into the low bits the table masks.
-      const std::uint64_t mixed = key * 0x9E3779B97F4A7C15ull;
-      return static_cast<std::size_t>(mixed ^ (mixed >> 29));
-    }
-  };
-  using Table = tsl::robin_map<std::uint64_t, BlockMasks, KeyHash>;
+  using Table = SpatialKeyMap<BlockMasks>;
 
   void mark(const VoxelIndex& index, bool occupied) {
     // Same block and in-block index as VoxelMap::blockOf / linearIndexInBlock, inlined for the

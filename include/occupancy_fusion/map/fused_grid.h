@@ -10,9 +10,8 @@
 #include <mutex>
 #include <vector>
 
-#include <tsl/robin_map.h>
-
 #include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
@@ -84,11 +83,6 @@ class FusedGridView {
   };
   const UpdateStats& lastUpdateStats() const { return stats_; }
 
-  // Hash of packed 64-bit tile and block keys.
-  struct KeyHash {
-    std::size_t operator()(std::uint64_t key) const;
-  };
-
  private:
   static constexpr int kSide = VoxelBlock::kSide;
   static constexpr int kArea = kSide * kSide;
@@ -104,8 +98,8 @@ class FusedGridView {
     std::array<std::uint8_t, kArea> occupied{};
     std::array<std::uint8_t, kArea> free{};
   };
-  using TileTable = tsl::robin_map<std::uint64_t, ColumnTile, KeyHash>;
-  using ShareTable = tsl::robin_map<std::uint64_t, BlockShare, KeyHash>;
+  using TileTable = SpatialKeyMap<ColumnTile>;   // keyed by packKey(column tile)
+  using ShareTable = SpatialKeyMap<BlockShare>;  // keyed by packKey(map block)
 
   void updateFromMap(const VoxelMap& map);
   void rebuildFromMap(const VoxelMap& map);

@@ -15,9 +15,8 @@
 #include <shared_mutex>
 #include <vector>
 
-#include <tsl/robin_map.h>
-
 #include "occupancy_fusion/map/occupancy_model.h"
+#include "occupancy_fusion/map/spatial_key.h"
 
 namespace occupancy_fusion {
 
@@ -164,13 +163,8 @@ class GridLayer2D {
   std::size_t memoryBytes() const;  // tiles, hash table and change log
 
  private:
-  struct TileHash {
-    std::size_t operator()(std::uint64_t key) const;
-  };
-  using TileTable = tsl::robin_map<std::uint64_t, std::unique_ptr<GridTile>, TileHash>;
+  using TileTable = SpatialKeyMap<std::unique_ptr<GridTile>>;  // keyed by packKey(tile)
 
-  static std::uint64_t packKey(const TileIndex& tile);
-  static TileIndex unpackKey(std::uint64_t key);
   GridTile& tileForWrite(const TileIndex& tile);  // allocates, logs; caller holds unique lock
   const GridTile* findTile(const TileIndex& tile) const;
   void markWritten(std::uint64_t key, GridTile* tile);

@@ -15,9 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include <tsl/robin_map.h>
-
 #include "occupancy_fusion/map/occupancy_model.h"
+#include "occupancy_fusion/map/spatial_key.h"
 
 namespace occupancy_fusion {
 
@@ -120,7 +119,7 @@ class VoxelMap {
   }
 
   // Coordinates. Indices are valid for |coordinate| < kMaxCoordinateVoxels * resolution.
-  static constexpr int kMaxBlockCoordinate = (1 << 20) - 1;
+  static constexpr int kMaxBlockCoordinate = kMaxKeyCoordinate3D;  // blocks are keyed by packKey
   static constexpr int kMaxCoordinateVoxels = kMaxBlockCoordinate * VoxelBlock::kSide;
   VoxelIndex indexOf(const Eigen::Vector3d& point) const;
   Eigen::Vector3d centerOf(const VoxelIndex& index) const;
@@ -171,13 +170,8 @@ class VoxelMap {
   std::size_t evictedBlockCount() const;
 
  private:
-  struct BlockHash {
-    std::size_t operator()(std::uint64_t key) const;
-  };
-  using BlockTable = tsl::robin_map<std::uint64_t, std::unique_ptr<VoxelBlock>, BlockHash>;
+  using BlockTable = SpatialKeyMap<std::unique_ptr<VoxelBlock>>;  // keyed by packKey(block)
 
-  static std::uint64_t packKey(const BlockIndex& block);
-  static BlockIndex unpackKey(std::uint64_t key);
   VoxelBlock& blockForWrite(const BlockIndex& block);  // allocates; caller holds unique lock
   const VoxelBlock* findBlock(const BlockIndex& block) const;
   void markChanged(std::uint64_t key);

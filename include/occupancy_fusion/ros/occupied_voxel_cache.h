@@ -7,8 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include <tsl/robin_map.h>
-
+#include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
@@ -37,17 +36,10 @@ class OccupiedVoxelCache {
   }
 
  private:
-  struct KeyHash {
-    std::size_t operator()(std::uint64_t key) const {
-      const std::uint64_t mixed = key * 0x9E3779B97F4A7C15ull;
-      return static_cast<std::size_t>(mixed ^ (mixed >> 29));
-    }
-  };
-  static std::uint64_t packKey(const BlockIndex& block);
   void storeBlock(const VoxelMap& map, const BlockIndex& index, const VoxelBlock& block);
   void dropBlock(std::uint64_t key);
 
-  tsl::robin_map<std::uint64_t, std::vector<Eigen::Vector3f>, KeyHash> blocks_;
+  SpatialKeyMap<std::vector<Eigen::Vector3f>> blocks_;  // keyed by packKey(block)
   std::size_t occupied_count_ = 0;
   std::uint64_t version_ = 0;
 };
