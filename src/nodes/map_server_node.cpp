@@ -1,22 +1,8 @@
 // Runs the occupancy_fusion/MapServer nodelet in its own process, under this node's name, so its
 // private parameters are this node's ~ parameters.
-#include <exception>
-
-#include <nodelet/loader.h>
-#include <ros/ros.h>
+#include "occupancy_fusion/ros/nodelet_main.h"
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "map_server");
-  nodelet::Loader loader;
-  try {
-    if (!loader.load(ros::this_node::getName(), "occupancy_fusion/MapServer",
-                     ros::names::getRemappings(), nodelet::V_string())) {
-      return 1;
-    }
-  } catch (const std::exception& error) {
-    ROS_FATAL("%s", error.what());
-    return 1;
-  }
-  ros::spin();
-  return 0;
+  return occupancy_fusion::runNodeletInOwnProcess(argc, argv, "map_server",
+                                                  "occupancy_fusion/MapServer");
 }
