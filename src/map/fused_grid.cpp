@@ -71,27 +71,43 @@ void raiseState(ColumnStates* states, int x, int y, std::int8_t state) {
   if (!inserted && it->second < state) it.value() = state;
 }
 
-OccupancyRaster rasterFromStates(const ColumnStates& states, double resolution) {
-  OccupancyRaster raster;
-  raster.resolution = resolution;
-  if (states.empty()) return raster;
+// Inclusive bounding box of columns, grown one column at a time; empty while lo.x() > hi.x().
+struct ColumnBox {
   Eigen::Vector2i lo = Eigen::Vector2i::Constant(std::numeric_limits<int>::max());
   Eigen::Vector2i hi = Eigen::Vector2i::Constant(std::numeric_limits<int>::min());
-  for (const auto& [key, state] : states) {
-    lo = lo.cwiseMin(unpackKey2(key));
-    hi = hi.cwiseMax(unpackKey2(key));
+  void extend(const Eigen::Vector2i& column) {
+    lo = lo.cwiseMin(column);
+    hi = hi.cwiseMax(column);
   }
-  raster.origin_x = lo.x() * resolution;
-  raster.origin_y = lo.y() * resolution;
-  raster.width = hi.x() - lo.x() + 1;
-  raster.height = hi.y() - lo.y() + 1;
+};
+
+// An all-unknown raster over the box (no cells when the box is empty).
+OccupancyRaster unknownRaster(const ColumnBox& box, double resolution) {
+  OccupancyRaster raster;
+  raster.resolution = resolution;
+  if (box.lo.x() > box.hi.x()) return raster;
+  raster.origin_x = box.lo.x() * resolution;
+  raster.origin_y = box.lo.y() * resolution;
+  raster.width = box.hi.x() - box.lo.x() + 1;
+  raster.height = box.hi.y() - box.lo.y() + 1;
   raster.data.assign(static_cast<std::size_t>(raster.width) * raster.height,
                      OccupancyRaster::kUnknown);
-  for (const auto& [key, state] : states) {
-    const Eigen::Vector2i cell = unpackKey2(key) - lo;
-    raster.data[static_cast<std::size_t>(cell.x()) +
-                static_cast<std::size_t>(raster.width) * cell.y()] = rasterValue(state);
-  }
+  return raster;
+}
+
+// Writes a known state into the raster made by unknownRaster(box, ...); column lies in box.
+void setColumn(const ColumnBox& box, const Eigen::Vector2i& column, std::int8_t state,
+               OccupancyRaster* raster) {
+  const Eigen::Vector2i cell = column - box.lo;
+  raster->data[static_cast<std::size_t>(cell.x()) +
+               static_cast<std::size_t>(raster->width) * cell.y()] = rasterValue(state);
+}
+
+OccupancyRaster rasterFromStates(const ColumnStates& states, double resolution) {
+  ColumnBox box;
+  for (const auto& [key, state] : states) box.extend(unpackKey2(key));
+  OccupancyRaster raster = unknownRaster(box, resolution);
+  for (const auto& [key, state] : states) setColumn(box, unpackKey2(key), state, &raster);
   return raster;
 }
 
@@ -342,33 +358,19 @@ OccupancyRaster FusedGridView::compose() const {
                            tile_index.y() * kSide + (column >> VoxelBlock::kSideLog2));
   };
   // Bounding box of the known columns first, then the raster in one pass.
-  Eigen::Vector2i lo = Eigen::Vector2i::Constant(std::numeric_limits<int>::max());
-  Eigen::Vector2i hi = Eigen::Vector2i::Constant(std::numeric_limits<int>::min());
+  ColumnBox box;
   for (const auto& [key, tile] : columns_) {
     const Eigen::Vector2i tile_index = unpackKey2(key);
     for (int column = 0; column < kArea; ++column) {
-      if (state_of(tile, column) == kStateUnknown) continue;
-      lo = lo.cwiseMin(column_of(tile_index, column));
-      hi = hi.cwiseMax(column_of(tile_index, column));
+      if (state_of(tile, column) != kStateUnknown) box.extend(column_of(tile_index, column));
     }
   }
-  OccupancyRaster raster;
-  raster.resolution = resolution_;
-  if (lo.x() > hi.x()) return raster;
-  raster.origin_x = lo.x() * resolution_;
-  raster.origin_y = lo.y() * resolution_;
-  raster.width = hi.x() - lo.x() + 1;
-  raster.height = hi.y() - lo.y() + 1;
-  raster.data.assign(static_cast<std::size_t>(raster.width) * raster.height,
-                     OccupancyRaster::kUnknown);
+  OccupancyRaster raster = unknownRaster(box, resolution_);
   for (const auto& [key, tile] : columns_) {
     const Eigen::Vector2i tile_index = unpackKey2(key);
     for (int column = 0; column < kArea; ++column) {
       const std::int8_t state = state_of(tile, column);
-      if (state == kStateUnknown) continue;
-      const Eigen::Vector2i cell = column_of(tile_index, column) - lo;
-      raster.data[static_cast<std::size_t>(cell.x()) +
-                  static_cast<std::size_t>(raster.width) * cell.y()] = rasterValue(state);
+      if (state != kStateUnknown) setColumn(box, column_of(tile_index, column), state, &raster);
     }
   }
   return raster;
