@@ -8,13 +8,13 @@
 
 #include <nodelet/nodelet.h>
 #include <std_srvs/SetBool.h>
-#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/ros/ros_parameter_source.h"
 #include "occupancy_fusion/ros/simulated_sensors.h"
+#include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/scenes.h"
 
 namespace occupancy_fusion {
@@ -63,16 +63,6 @@ CirclePath readCirclePath(const ParameterSource& source) {
   source.get("trajectory/yaw_offset", &path.yaw_offset);
   path.validate();
   return path;
-}
-
-geometry_msgs::TransformStamped stampedTransform(const Eigen::Isometry3d& parent_T_child,
-                                                 const std::string& parent,
-                                                 const std::string& child, const ros::Time& stamp) {
-  geometry_msgs::TransformStamped message = tf2::eigenToTransform(parent_T_child);
-  message.header.frame_id = parent;
-  message.header.stamp = stamp;
-  message.child_frame_id = child;
-  return message;
 }
 
 }  // namespace
@@ -144,7 +134,7 @@ class Simulator : public nodelet::Nodelet {
   void publishStaticTransforms() {
     // odom coincides with map: the simulated odometry does not drift.
     std::vector<geometry_msgs::TransformStamped> transforms = {
-        stampedTransform(Eigen::Isometry3d::Identity(), map_frame_, odom_frame_, start_)};
+        transformMessage(Eigen::Isometry3d::Identity(), map_frame_, odom_frame_, start_)};
     for (const std::unique_ptr<SimulatedSensor>& sensor : sensors_) {
       for (const auto& transform : sensor->staticTransforms(base_frame_)) {
         transforms.push_back(transform);
@@ -157,7 +147,7 @@ class Simulator : public nodelet::Nodelet {
     if (stamp == last_body_stamp_) return;  // tf2 rejects repeated stamps
     last_body_stamp_ = stamp;
     broadcaster_.sendTransform(
-        stampedTransform(bodyPoseAt(stamp), odom_frame_, base_frame_, stamp));
+        transformMessage(bodyPoseAt(stamp), odom_frame_, base_frame_, stamp));
   }
 
   std::string scene_name_ = "room";

@@ -9,9 +9,9 @@
 #include <sensor_msgs/fill_image.h>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
-#include <tf2_eigen/tf2_eigen.h>
 
 #include "occupancy_fusion/ros/conversions.h"
+#include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/trajectory.h"
 
 namespace occupancy_fusion {
@@ -35,16 +35,6 @@ Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string
                    Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
                       .toRotationMatrix();
   return pose;
-}
-
-geometry_msgs::TransformStamped transformMessage(const Eigen::Isometry3d& parent_T_child,
-                                                 const std::string& parent,
-                                                 const std::string& child, const ros::Time& stamp) {
-  geometry_msgs::TransformStamped message = tf2::eigenToTransform(parent_T_child);
-  message.header.frame_id = parent;
-  message.header.stamp = stamp;
-  message.child_frame_id = child;
-  return message;
 }
 
 sensor_msgs::CameraInfo cameraInfo(const sim::PinholeCamera& camera) {

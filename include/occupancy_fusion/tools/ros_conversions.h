@@ -10,6 +10,8 @@
 #include <ros/time.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include "occupancy_fusion/ros/transform_message.h"  // transformMessage for the tools, too
+
 namespace occupancy_fusion {
 
 // x, y, z of every point with finite coordinates. Accepts FLOAT32 or FLOAT64 x/y/z fields;
@@ -20,11 +22,5 @@ std::vector<Eigen::Vector3f> pointsFromCloud(const sensor_msgs::PointCloud2& clo
 // An unorganised (height 1) cloud with FLOAT32 x, y, z fields.
 sensor_msgs::PointCloud2 cloudFromPoints(const std::vector<Eigen::Vector3f>& points,
                                          const std::string& frame_id, const ros::Time& stamp);
-
-// parent_T_child as a tf message: it maps points from child_frame to parent_frame.
-geometry_msgs::TransformStamped transformMessage(const Eigen::Isometry3d& parent_T_child,
-                                                 const std::string& parent_frame,
-                                                 const std::string& child_frame,
-                                                 const ros::Time& stamp);
 
 }  // namespace occupancy_fusion

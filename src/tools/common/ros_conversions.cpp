@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include <sensor_msgs/point_cloud2_iterator.h>
-#include <tf2_eigen/tf2_eigen.h>
 
 namespace occupancy_fusion {
 namespace {
@@ -66,17 +65,6 @@ sensor_msgs::PointCloud2 cloudFromPoints(const std::vector<Eigen::Vector3f>& poi
   cloud.is_dense = std::all_of(points.begin(), points.end(),
                                [](const Eigen::Vector3f& point) { return point.allFinite(); });
   return cloud;
-}
-
-geometry_msgs::TransformStamped transformMessage(const Eigen::Isometry3d& parent_T_child,
-                                                 const std::string& parent_frame,
-                                                 const std::string& child_frame,
-                                                 const ros::Time& stamp) {
-  geometry_msgs::TransformStamped message = tf2::eigenToTransform(parent_T_child);
-  message.header.frame_id = parent_frame;
-  message.header.stamp = stamp;
-  message.child_frame_id = child_frame;
-  return message;
 }
 
 }  // namespace occupancy_fusion
