@@ -103,11 +103,11 @@ MapPublisher::MapPublisher(const ros::NodeHandle& node_handle,
 
   diagnostics_.setHardwareID("map '" + map_->name() + "'");
   diagnostics_.add("map publishing", this, &MapPublisher::fillDiagnostics);
-  timer_ =
-      topics.createTimer(ros::Duration(1.0 / config_.publish_rate), &MapPublisher::onTimer, this);
+  timer_ = topics.createWallTimer(ros::WallDuration(1.0 / config_.publish_rate),
+                                  &MapPublisher::onTimer, this);
 }
 
-void MapPublisher::onTimer(const ros::TimerEvent& /*event*/) {
+void MapPublisher::onTimer(const ros::WallTimerEvent& /*event*/) {
   publishCycle();
   diagnostics_.update();
 }

@@ -67,7 +67,7 @@ class MapPublisher {
     }
   };
 
-  void onTimer(const ros::TimerEvent& event);
+  void onTimer(const ros::WallTimerEvent& event);
   void publishCycle();
   bool needsSending(const ros::Publisher& publisher, const SentVersion& sent) const;
   SentVersion currentVersion() const;
@@ -93,7 +93,9 @@ class MapPublisher {
   SentVersion grid_sent_, markers_sent_, cloud_sent_, binary_sent_;
   ros::Publisher grid_publisher_, markers_publisher_, cloud_publisher_, binary_publisher_;
   ros::ServiceServer reset_service_, clear_box_service_, save_map_service_;
-  ros::Timer timer_;
+  // Wall clock: with use_sim_time a bag that has ended stops ROS time, and a subscriber joining
+  // then must still get the current map, not a stale latched one.
+  ros::WallTimer timer_;
   diagnostic_updater::Updater diagnostics_;
 };
 
