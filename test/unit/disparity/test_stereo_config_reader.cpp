@@ -1,0 +1,193 @@
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/params/stereo_config_reader.h"
+
+namespace occupancy_fusion {
+namespace {
+
+// Key/value pairs as text, parsed at get() like a YAML scalar; a value that does not parse as the
+// asked type throws, as the real sources do.
+class TextParameterSource : public ParameterSource {
+ public:
+  explicit TextParameterSource(std::map<std::string, std::string> values)
+      : values_(std::move(values)) {}
+  bool get(const std::string& key, double* value) const override { return parse(key, value); }
+  bool get(const std::string& key, int* value) const override { return parse(key, value); }
+  bool get(const std::string& key, bool* value) const override { return parse(key, value); }
+  bool get(const std::string& key, std::string* value) const override { return parse(key, value); }
+  bool get(const std::string&, std::vector<std::string>*) const override { return false; }
+  bool get(const std::string&, std::vector<double>*) const override { return false; }
+
+ private:
+  template <typename T>
+  bool parse(const std::string& key, T* value) const {
+    const auto found = values_.find(key);
+    if (found == values_.end()) return false;
+    try {
+      *value = YAML::Load(found->second).as<T>();
+    } catch (const YAML::Exception&) {
+      throw std::invalid_argument(key + " has the wrong type");
+    }
+    return true;
+  }
+  std::map<std::string, std::string> values_;
+};
+
+// The leaves of a YAML map as "a/b" keys, as rosparam puts them under a namespace.
+void flatten(const YAML::Node& node, const std::string& prefix,
+             std::map<std::string, std::string>* out) {
+  for (const auto& entry : node) {
+    const std::string key = prefix + entry.first.as<std::string>();
+    if (entry.second.IsMap()) {
+      flatten(entry.second, key + "/", out);
+    } else {
+      (*out)[key] = entry.second.as<std::string>();
+    }
+  }
+}
+
+std::string messageOf(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "(no exception)";
+}
+
+VisibilityStereoConfig readFrom(std::map<std::string, std::string> values) {
+  return readVisibilityStereoConfig(TextParameterSource(std::move(values)));
+}
+
+TEST(StereoConfigReader, EmptySourceGivesTableI) {
+  const VisibilityStereoConfig config = readFrom({});
+  EXPECT_EQ(config.method, StereoIntegrationMethod::kVisibility);
+  EXPECT_DOUBLE_EQ(config.prob_hit_visible_occupied, 0.55);
+  EXPECT_DOUBLE_EQ(config.prob_hit_visible_free, 0.43);
+  EXPECT_DOUBLE_EQ(config.prob_hit_invisible, 0.05);
+  EXPECT_DOUBLE_EQ(config.prob_visible_if_occluded, 0.2);
+  EXPECT_DOUBLE_EQ(config.prob_visible_if_not_occluded, 1.0);
+  EXPECT_DOUBLE_EQ(config.visibility_min, 0.1);
+  EXPECT_DOUBLE_EQ(config.visibility_max, 0.7);
+}
+
+TEST(StereoConfigReader, ReadsEveryField) {
+  const VisibilityStereoConfig config = readFrom({
+      {"stereo/method", "octomap"},
+      {"stereo/prob_hit_visible_occupied", "0.6"},
+      {"stereo/prob_hit_visible_free", "0.4"},
+      {"stereo/prob_hit_invisible", "0.1"},
+      {"stereo/prob_visible_if_occluded", "0.3"},
+      {"stereo/prob_visible_if_not_occluded", "0.9"},
+      {"stereo/visibility_min", "0.15"},
+      {"stereo/visibility_max", "0.8"},
+      {"stereo/unknown_occupancy", "0.45"},
+      {"stereo/unknown_neighbour_occupancy", "0.35"},
+      {"stereo/inside_stop_probability", "0.95"},
+      {"stereo/max_range", "7.5"},
+      {"stereo/disparity_sigma_px", "0.25"},
+      {"stereo/min_disparity_px", "2"},
+      {"stereo/input_resolution", "quarter"},
+  });
+  EXPECT_EQ(config.method, StereoIntegrationMethod::kOctomap);
+  EXPECT_DOUBLE_EQ(config.prob_hit_visible_occupied, 0.6);
+  EXPECT_DOUBLE_EQ(config.prob_hit_visible_free, 0.4);
+  EXPECT_DOUBLE_EQ(config.prob_hit_invisible, 0.1);
+  EXPECT_DOUBLE_EQ(config.prob_visible_if_occluded, 0.3);
+  EXPECT_DOUBLE_EQ(config.prob_visible_if_not_occluded, 0.9);
+  EXPECT_DOUBLE_EQ(config.visibility_min, 0.15);
+  EXPECT_DOUBLE_EQ(config.visibility_max, 0.8);
+  EXPECT_DOUBLE_EQ(config.unknown_occupancy, 0.45);
+  EXPECT_DOUBLE_EQ(config.unknown_neighbour_occupancy, 0.35);
+  EXPECT_DOUBLE_EQ(config.inside_stop_probability, 0.95);
+  EXPECT_DOUBLE_EQ(config.max_range, 7.5);
+  EXPECT_DOUBLE_EQ(config.disparity.disparity_sigma_px, 0.25);
+  EXPECT_DOUBLE_EQ(config.disparity.min_disparity_px, 2.0);
+  EXPECT_EQ(config.disparity.input_resolution, InputResolution::kQuarter);
+}
+
+TEST(StereoConfigReader, ErrorsNameTheParameter) {
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/method", "sgbm"}});
+            }).find("stereo/method"),
+            std::string::npos);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/input_resolution", "eighth"}});
+            }).find("stereo/input_resolution"),
+            std::string::npos);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/visibility_min", "0.9"}});
+            }).find("stereo/visibility_min"),
+            std::string::npos);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/prob_hit_invisible", "1.5"}});
+            }).find("stereo/prob_hit_invisible"),
+            std::string::npos);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/disparity_sigma_px", "-1"}});
+            }).find("stereo/disparity_sigma_px"),
+            std::string::npos);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/max_range", "far"}});
+            }).find("stereo/max_range"),
+            std::string::npos);
+}
+
+// The shipped YAML file: every stereo/ key is one the reader knows, Table I's values are its
+// values, and it parses into a valid configuration.
+TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
+  const std::filesystem::path file =
+      std::filesystem::path(__FILE__).parent_path() / "../../../config/disparity_mapper.yaml";
+  std::map<std::string, std::string> values;
+  flatten(YAML::LoadFile(file.string()), "", &values);
+  const std::vector<std::string> known = {"method",
+                                          "prob_hit_visible_occupied",
+                                          "prob_hit_visible_free",
+                                          "prob_hit_invisible",
+                                          "prob_visible_if_occluded",
+                                          "prob_visible_if_not_occluded",
+                                          "visibility_min",
+                                          "visibility_max",
+                                          "unknown_occupancy",
+                                          "unknown_neighbour_occupancy",
+                                          "inside_stop_probability",
+                                          "max_range",
+                                          "disparity_sigma_px",
+                                          "min_disparity_px",
+                                          "input_resolution"};
+  std::size_t stereo_keys = 0;
+  for (const auto& [key, value] : values) {
+    if (key.rfind(kStereoParameterPrefix, 0) != 0) continue;
+    ++stereo_keys;
+    const std::string name = key.substr(kStereoParameterPrefix.size());
+    EXPECT_NE(std::find(known.begin(), known.end(), name), known.end()) << key;
+  }
+  EXPECT_EQ(stereo_keys, known.size());
+  const VisibilityStereoConfig from_file = readFrom(values);
+  const VisibilityStereoConfig defaults;
+  EXPECT_EQ(from_file.method, defaults.method);
+  EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_occupied, defaults.prob_hit_visible_occupied);
+  EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_free, defaults.prob_hit_visible_free);
+  EXPECT_DOUBLE_EQ(from_file.prob_hit_invisible, defaults.prob_hit_invisible);
+  EXPECT_DOUBLE_EQ(from_file.prob_visible_if_occluded, defaults.prob_visible_if_occluded);
+  EXPECT_DOUBLE_EQ(from_file.prob_visible_if_not_occluded, defaults.prob_visible_if_not_occluded);
+  EXPECT_DOUBLE_EQ(from_file.visibility_min, defaults.visibility_min);
+  EXPECT_DOUBLE_EQ(from_file.visibility_max, defaults.visibility_max);
+  EXPECT_DOUBLE_EQ(from_file.unknown_occupancy, defaults.unknown_occupancy);
+  EXPECT_DOUBLE_EQ(from_file.unknown_neighbour_occupancy, defaults.unknown_neighbour_occupancy);
+  EXPECT_DOUBLE_EQ(from_file.inside_stop_probability, defaults.inside_stop_probability);
+  EXPECT_DOUBLE_EQ(from_file.disparity.disparity_sigma_px, defaults.disparity.disparity_sigma_px);
+  EXPECT_EQ(from_file.disparity.input_resolution, defaults.disparity.input_resolution);
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
