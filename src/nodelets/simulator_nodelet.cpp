@@ -13,7 +13,9 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/ros/ros_parameter_source.h"
+#include "occupancy_fusion/ros/simulated_laser_scanner.h"
 #include "occupancy_fusion/ros/simulated_sensors.h"
+#include "occupancy_fusion/ros/simulated_stereo_camera.h"
 #include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/scenes.h"
 
@@ -110,6 +112,9 @@ class Simulator : public nodelet::Nodelet {
     path_ = readCirclePath(parameters);
     sensors_.push_back(std::make_unique<SimulatedDepthCamera>(
         getNodeHandle(), readSimulatedDepthCameraConfig(parameters, "camera/")));
+    appendSimulatedLaserScanners(getNodeHandle(), parameters, &sensors_);
+    sensors_.push_back(std::make_unique<SimulatedStereoCamera>(
+        getNodeHandle(), readSimulatedStereoCameraConfig(parameters, "stereo/")));
   }
 
   // The robot stands still while paused: path time excludes the paused intervals.

@@ -1,0 +1,178 @@
+// DisparityMapper nodelet: disparity (stereo_msgs/DisparityImage) -> tf2 message filter into the
+// map frame -> VisibilityStereoIntegrator (Schauwecker & Zell 2014) -> shared map. The principal
+// point comes from the left camera's camera_info. With ~publish_map it also publishes the map, for
+// a mapper that runs alone in its own process.
+//
+// camera_info is cached (the latest message), not time-synchronised with the disparity images:
+// a rectified pair's intrinsics do not change while it runs, drivers publish camera_info at their
+// own rate (or latched, once), and an exact-time synchroniser would drop every disparity image
+// whose camera_info was lost or stamped differently. Only the principal point and fy are taken
+// from it; f and T come with each disparity image. A camera_info that does not fit the image
+// (another size) is detected per frame, and the frame dropped.
+#include <atomic>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <message_filters/subscriber.h>
+#include <nodelet/nodelet.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <stereo_msgs/DisparityImage.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+#include <tf2_ros/transform_listener.h>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/params/stereo_config_reader.h"
+#include "occupancy_fusion/ros/disparity_messages.h"
+#include "occupancy_fusion/ros/map_publisher.h"
+#include "occupancy_fusion/ros/ros_parameter_source.h"
+#include "occupancy_fusion/ros/shared_map_access.h"
+
+namespace occupancy_fusion {
+
+class DisparityMapper : public nodelet::Nodelet {
+ private:
+  using Disparity = stereo_msgs::DisparityImage;
+
+  void onInit() override {
+    const RosParameterSource parameters(getPrivateNodeHandle());
+    int queue_size = 5;
+    bool publish_map = false;
+    try {
+      map_ = acquireSharedMap(parameters, getName());
+      integrator_ =
+          std::make_unique<VisibilityStereoIntegrator>(readVisibilityStereoConfig(parameters));
+      parameters.get("queue_size", &queue_size);
+      if (queue_size < 1) throw std::invalid_argument("queue_size must be >= 1");
+      parameters.get("publish_map", &publish_map);
+      if (publish_map) {
+        map_publisher_ =
+            std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(), getName(), map_,
+                                           readMapPublisherConfig(parameters));
+      }
+    } catch (const std::invalid_argument& error) {
+      NODELET_FATAL("invalid parameter: %s", error.what());
+      throw;
+    }
+    NODELET_INFO("stereo method '%s', input resolution %s",
+                 toString(integrator_->config().method).c_str(),
+                 toString(integrator_->config().disparity.input_resolution).c_str());
+    subscribe(queue_size);
+    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
+                                                                 getPrivateNodeHandle(), getName());
+    diagnostics_->setHardwareID("map '" + map_->name() + "'");
+    diagnostics_->add("disparity mapping", this, &DisparityMapper::fillDiagnostics);
+    diagnostics_timer_ = getNodeHandle().createTimer(
+        ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  }
+
+  // All callbacks run on this nodelet's single-threaded queue (getNodeHandle()), so the cached
+  // camera_info needs no lock.
+  void subscribe(int queue_size) {
+    camera_info_subscriber_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
+        "camera_info", 1,
+        [this](const sensor_msgs::CameraInfo::ConstPtr& info) { camera_info_ = info; });
+    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
+    disparity_subscriber_.subscribe(getNodeHandle(), "disparity", queue_size);
+    tf_filter_ = std::make_unique<tf2_ros::MessageFilter<Disparity>>(
+        disparity_subscriber_, *tf_buffer_, map_->frameId(), queue_size, getNodeHandle());
+    tf_filter_->registerCallback(
+        [this](const Disparity::ConstPtr& disparity) { onDisparity(*disparity); });
+    tf_filter_->registerFailureCallback(
+        [this](const Disparity::ConstPtr& disparity,
+               tf2_ros::filter_failure_reasons::FilterFailureReason) {
+          ++dropped_no_transform_;
+          NODELET_WARN_THROTTLE(5.0, "no transform from '%s' to '%s' at %.3f: image dropped",
+                                disparity->header.frame_id.c_str(), map_->frameId().c_str(),
+                                disparity->header.stamp.toSec());
+        });
+  }
+
+  // The header of a DisparityImage is the left optical frame's (stereo_image_proc copies the left
+  // image's header into both the message and its image).
+  void onDisparity(const Disparity& message) {
+    if (!camera_info_) {
+      ++dropped_no_camera_info_;
+      NODELET_WARN_THROTTLE(5.0, "no camera_info received yet on '%s': disparity images dropped",
+                            camera_info_subscriber_.getTopic().c_str());
+      return;
+    }
+    std::vector<float> disparity;
+    StereoCamera camera;
+    try {
+      disparity = validDisparities(message);
+      camera = stereoCameraOf(message, *camera_info_);
+    } catch (const std::invalid_argument& error) {
+      ++dropped_invalid_;
+      NODELET_ERROR_THROTTLE(5.0, "disparity image dropped: %s", error.what());
+      return;
+    }
+    Eigen::Isometry3d T_map_camera;
+    try {
+      T_map_camera = tf2::transformToEigen(tf_buffer_->lookupTransform(
+          map_->frameId(), message.header.frame_id, message.header.stamp));
+    } catch (const tf2::TransformException& error) {
+      ++dropped_no_transform_;
+      NODELET_WARN_THROTTLE(5.0, "disparity image dropped: %s", error.what());
+      return;
+    }
+    const DisparityImageView view{static_cast<int>(message.image.width),
+                                  static_cast<int>(message.image.height), disparity.data(), 0};
+    last_stats_ = integrator_->integrate(view, camera, T_map_camera, &map_->voxels());
+    ++integrated_images_;
+    skipped_points_ += last_stats_.skipped_points;
+    NODELET_DEBUG("integrated %zu points (%zu skipped) in %.1f ms, cache hit rate %.2f",
+                  last_stats_.points, last_stats_.skipped_points, last_stats_.milliseconds(),
+                  last_stats_.cacheHitRate());
+  }
+
+  void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    const bool starved = !camera_info_ && dropped_no_camera_info_ > 0;
+    if (starved) {
+      status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for camera_info");
+    } else {
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
+    }
+    status.add("images integrated", integrated_images_.load());
+    status.add("images dropped (invalid)", dropped_invalid_.load());
+    status.add("images dropped (no camera_info)", dropped_no_camera_info_.load());
+    status.add("images dropped (no transform)", dropped_no_transform_.load());
+    status.add("points skipped", skipped_points_.load());
+    status.add("last image points", last_stats_.points);
+    status.add("last image rays stopped invisible", last_stats_.rays_invisible);
+    status.add("last image voxels updated", last_stats_.updated_voxels);
+    status.add("last image cache hit rate", last_stats_.cacheHitRate());
+    status.add("last image ms", last_stats_.milliseconds());
+    status.add("map version", map_->voxels().version());
+  }
+
+  std::shared_ptr<SharedMap> map_;
+  std::unique_ptr<VisibilityStereoIntegrator> integrator_;
+  std::unique_ptr<MapPublisher> map_publisher_;
+
+  ros::Subscriber camera_info_subscriber_;
+  sensor_msgs::CameraInfo::ConstPtr camera_info_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  message_filters::Subscriber<Disparity> disparity_subscriber_;
+  std::unique_ptr<tf2_ros::MessageFilter<Disparity>> tf_filter_;
+
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::Timer diagnostics_timer_;
+  std::atomic<std::size_t> integrated_images_{0};
+  std::atomic<std::size_t> dropped_invalid_{0};
+  std::atomic<std::size_t> dropped_no_camera_info_{0};
+  std::atomic<std::size_t> dropped_no_transform_{0};
+  std::atomic<std::size_t> skipped_points_{0};
+  StereoIntegrationStats last_stats_;
+};
+
+}  // namespace occupancy_fusion
+
+PLUGINLIB_EXPORT_CLASS(occupancy_fusion::DisparityMapper, nodelet::Nodelet)

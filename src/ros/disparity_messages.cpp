@@ -1,0 +1,139 @@
+#include "occupancy_fusion/ros/disparity_messages.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include <sensor_msgs/image_encodings.h>
+
+namespace occupancy_fusion {
+namespace {
+
+bool hostIsBigEndian() {
+  const std::uint16_t probe = 1;
+  std::uint8_t first_byte = 0;
+  std::memcpy(&first_byte, &probe, 1);
+  return first_byte == 0;
+}
+
+float readFloat(const std::uint8_t* bytes, bool swap) {
+  std::uint8_t ordered[sizeof(float)];
+  std::memcpy(ordered, bytes, sizeof(float));
+  if (swap) std::reverse(ordered, ordered + sizeof(float));
+  float value = 0.0f;
+  std::memcpy(&value, ordered, sizeof(float));
+  return value;
+}
+
+void requireConsistentLayout(const sensor_msgs::Image& image) {
+  if (image.encoding != sensor_msgs::image_encodings::TYPE_32FC1) {
+    throw std::invalid_argument("disparity image encoding must be 32FC1, got '" + image.encoding +
+                                "'");
+  }
+  if (image.width == 0 || image.height == 0) {
+    throw std::invalid_argument("disparity image is empty");
+  }
+  if (image.step < image.width * sizeof(float) ||
+      image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+    throw std::invalid_argument("disparity image of " + std::to_string(image.width) + "x" +
+                                std::to_string(image.height) + " has step " +
+                                std::to_string(image.step) + " and " +
+                                std::to_string(image.data.size()) + " bytes");
+  }
+}
+
+bool insideWindow(const sensor_msgs::RegionOfInterest& window, std::uint32_t u, std::uint32_t v) {
+  if (window.width == 0 || window.height == 0) return true;  // not set: the whole image
+  return u >= window.x_offset && u < window.x_offset + window.width && v >= window.y_offset &&
+         v < window.y_offset + window.height;
+}
+
+}  // namespace
+
+std::vector<float> validDisparities(const stereo_msgs::DisparityImage& message) {
+  const sensor_msgs::Image& image = message.image;
+  requireConsistentLayout(image);
+  const bool swap = (image.is_bigendian != 0) != hostIsBigEndian();
+  const bool has_upper_bound = message.max_disparity > message.min_disparity;
+  constexpr float kInvalid = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> disparity(static_cast<std::size_t>(image.width) * image.height);
+  for (std::uint32_t v = 0; v < image.height; ++v) {
+    const std::uint8_t* row = image.data.data() + static_cast<std::size_t>(v) * image.step;
+    for (std::uint32_t u = 0; u < image.width; ++u) {
+      const float d = readFloat(row + u * sizeof(float), swap);
+      const bool valid = std::isfinite(d) && d >= message.min_disparity &&
+                         (!has_upper_bound || d <= message.max_disparity) &&
+                         insideWindow(message.valid_window, u, v);
+      disparity[static_cast<std::size_t>(v) * image.width + u] = valid ? d : kInvalid;
+    }
+  }
+  return disparity;
+}
+
+StereoCamera stereoCameraOf(const stereo_msgs::DisparityImage& message,
+                            const sensor_msgs::CameraInfo& left_info) {
+  const double binning_x = std::max<std::uint32_t>(1, left_info.binning_x);
+  const double binning_y = std::max<std::uint32_t>(1, left_info.binning_y);
+  const auto binned_width = static_cast<std::uint32_t>(left_info.width / binning_x);
+  const auto binned_height = static_cast<std::uint32_t>(left_info.height / binning_y);
+  if (binned_width != message.image.width || binned_height != message.image.height) {
+    throw std::invalid_argument("camera_info is for " + std::to_string(binned_width) + "x" +
+                                std::to_string(binned_height) + " images, the disparity image is " +
+                                std::to_string(message.image.width) + "x" +
+                                std::to_string(message.image.height));
+  }
+  // The disparity lives in the rectified image, whose intrinsics are P's; a camera_info without
+  // P (all zero) describes an image that needed no rectification.
+  const bool has_projection = left_info.P[0] != 0.0;
+  StereoCamera camera;
+  camera.fx = message.f;
+  camera.baseline = message.T;
+  camera.fy = (has_projection ? left_info.P[5] : left_info.K[4]) / binning_y;
+  camera.cx = (has_projection ? left_info.P[2] : left_info.K[2]) / binning_x;
+  camera.cy = (has_projection ? left_info.P[6] : left_info.K[5]) / binning_y;
+  camera.validate();
+  return camera;
+}
+
+stereo_msgs::DisparityImage disparityImageMessage(const std::vector<float>& disparity, int width,
+                                                  int height, const StereoCamera& camera) {
+  if (disparity.size() != static_cast<std::size_t>(width) * height) {
+    throw std::invalid_argument("disparity buffer does not hold width x height values");
+  }
+  stereo_msgs::DisparityImage message;
+  message.image.width = static_cast<std::uint32_t>(width);
+  message.image.height = static_cast<std::uint32_t>(height);
+  message.image.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
+  message.image.is_bigendian = hostIsBigEndian() ? 1 : 0;
+  message.image.step = static_cast<std::uint32_t>(width * sizeof(float));
+  message.image.data.resize(disparity.size() * sizeof(float));
+  std::vector<float> written(disparity);
+  for (float& d : written) {
+    if (!std::isfinite(d)) d = -1.0f;
+  }
+  std::memcpy(message.image.data.data(), written.data(), message.image.data.size());
+  message.f = static_cast<float>(camera.fx);
+  message.T = static_cast<float>(camera.baseline);
+  message.valid_window.width = message.image.width;
+  message.valid_window.height = message.image.height;
+  message.min_disparity = 0.0f;
+  message.max_disparity = static_cast<float>(width);
+  message.delta_d = 1.0f / 16.0f;
+  return message;
+}
+
+sensor_msgs::CameraInfo leftCameraInfoMessage(const StereoCamera& camera, int width, int height) {
+  sensor_msgs::CameraInfo info;
+  info.width = static_cast<std::uint32_t>(width);
+  info.height = static_cast<std::uint32_t>(height);
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
+  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  info.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
+  return info;
+}
+
+}  // namespace occupancy_fusion
