@@ -66,16 +66,17 @@ TEST(DepthConfigReader, ErrorsNameTheParameterKey) {
   EXPECT_NE(readErrorOf("depth: {k: fast}").find("depth/k"), std::string::npos);
 }
 
-// The shipped config file parses, holds the defaults it documents, and sets every field.
-TEST(DepthConfigReader, ShippedConfigFileHoldsTheDefaults) {
+// The shipped config file parses and sets every field (its k and sigma are scaled to its 0.05 m
+// map, the rest are the defaults it documents).
+TEST(DepthConfigReader, ShippedConfigFileSetsEveryField) {
   const fs::path repository = fs::path(__FILE__).parent_path() / "../../..";
-  const fs::path file = repository / "config/depth_mapper.yaml";
-  const YamlParameterSource source = YamlParameterSource::fromFile(file.string());
+  const YamlParameterSource source =
+      YamlParameterSource::fromFile((repository / "config/depth_mapper.yaml").string());
   const PyramidDepthConfig config = readPyramidDepthConfig(source);
   const PyramidDepthConfig defaults;
   EXPECT_EQ(config.method, defaults.method);
-  EXPECT_DOUBLE_EQ(config.k, defaults.k);
-  EXPECT_DOUBLE_EQ(config.sigma, defaults.sigma);
+  EXPECT_DOUBLE_EQ(config.k, 0.05);
+  EXPECT_DOUBLE_EQ(config.sigma, 0.05);
   EXPECT_DOUBLE_EQ(config.sigma_quadratic, defaults.sigma_quadratic);
   EXPECT_DOUBLE_EQ(config.min_range, defaults.min_range);
   EXPECT_DOUBLE_EQ(config.max_range, defaults.max_range);
