@@ -26,10 +26,9 @@ struct ConvexPolygon {
     ++size;
   }
   double coordinate(int axis, int i) const {
-    return axis == 0 ? x[static_cast<std::size_t>(i)]
-                     : y[static_cast<std::size_t>(i)];
+    return axis == 0 ? x[static_cast<std::size_t>(i)] : y[static_cast<std::size_t>(i)];
   }
-  double area() const { // shoelace
+  double area() const {  // shoelace
     double twice = 0.0;
     for (int i = 0; i < size; ++i) {
       const int j = i + 1 == size ? 0 : i + 1;
@@ -42,8 +41,7 @@ struct ConvexPolygon {
 
 // Cuts a convex polygon along the line {axis coordinate = c} into the part
 // below and above it.
-void cut(const ConvexPolygon &in, int axis, double c, ConvexPolygon *below,
-         ConvexPolygon *above) {
+void cut(const ConvexPolygon& in, int axis, double c, ConvexPolygon* below, ConvexPolygon* above) {
   below->size = 0;
   above->size = 0;
   for (int i = 0; i < in.size; ++i) {
@@ -52,31 +50,27 @@ void cut(const ConvexPolygon &in, int axis, double c, ConvexPolygon *below,
     const double yi = in.y[static_cast<std::size_t>(i)];
     const double di = in.coordinate(axis, i) - c;
     const double dj = in.coordinate(axis, j) - c;
-    if (di <= 0.0)
-      below->push(xi, yi);
-    if (di >= 0.0)
-      above->push(xi, yi);
+    if (di <= 0.0) below->push(xi, yi);
+    if (di >= 0.0) above->push(xi, yi);
     if ((di < 0.0 && dj > 0.0) || (di > 0.0 && dj < 0.0)) {
       const double t = di / (di - dj);
       double px = xi + t * (in.x[static_cast<std::size_t>(j)] - xi);
       double py = yi + t * (in.y[static_cast<std::size_t>(j)] - yi);
-      (axis == 0 ? px : py) = c; // exactly on the line
+      (axis == 0 ? px : py) = c;  // exactly on the line
       below->push(px, py);
       above->push(px, py);
     }
   }
 }
 
-double minOf(const ConvexPolygon &p, int axis) {
+double minOf(const ConvexPolygon& p, int axis) {
   double m = p.coordinate(axis, 0);
-  for (int i = 1; i < p.size; ++i)
-    m = std::min(m, p.coordinate(axis, i));
+  for (int i = 1; i < p.size; ++i) m = std::min(m, p.coordinate(axis, i));
   return m;
 }
-double maxOf(const ConvexPolygon &p, int axis) {
+double maxOf(const ConvexPolygon& p, int axis) {
   double m = p.coordinate(axis, 0);
-  for (int i = 1; i < p.size; ++i)
-    m = std::max(m, p.coordinate(axis, i));
+  for (int i = 1; i < p.size; ++i) m = std::max(m, p.coordinate(axis, i));
   return m;
 }
 
@@ -86,19 +80,15 @@ struct Piece {
   float weight;
 };
 
-constexpr double kNegligibleArea =
-    1e-12; // in cell areas: pieces of a vertex or an edge
+constexpr double kNegligibleArea = 1e-12;  // in cell areas: pieces of a vertex or an edge
 
 // Cuts `polygon` (in cell units) into its parts inside cells [0, count) along
 // `axis`; calls emit(index, part) for each part with a positive area.
 template <typename Emit>
-void slice(const ConvexPolygon &polygon, int axis, int count, Emit &&emit) {
-  const int first =
-      std::max(0, static_cast<int>(std::floor(minOf(polygon, axis))));
-  const int last =
-      std::min(count - 1, static_cast<int>(std::floor(maxOf(polygon, axis))));
-  if (first > last)
-    return;
+void slice(const ConvexPolygon& polygon, int axis, int count, Emit&& emit) {
+  const int first = std::max(0, static_cast<int>(std::floor(minOf(polygon, axis))));
+  const int last = std::min(count - 1, static_cast<int>(std::floor(maxOf(polygon, axis))));
+  if (first > last) return;
   ConvexPolygon rest = polygon;
   ConvexPolygon below;
   ConvexPolygon above;
@@ -108,42 +98,37 @@ void slice(const ConvexPolygon &polygon, int axis, int count, Emit &&emit) {
   }
   for (int i = first; i <= last && rest.size >= 3; ++i) {
     cut(rest, axis, i + 1, &below, &above);
-    if (below.size >= 3)
-      emit(i, below);
+    if (below.size >= 3) emit(i, below);
     rest = above;
   }
 }
 
 // Algorithm 1, lines 3-7, for one polar cell: the faces of the overlay inside
 // it.
-void overlayQuad(const ConvexPolygon &quad, std::int32_t polar_index,
-                 const OverlayGeometry &g, std::vector<Piece> *pieces) {
-  slice(quad, 0, g.width, [&](int column, const ConvexPolygon &strip) {
-    slice(strip, 1, g.height, [&](int row, const ConvexPolygon &face) {
-      const double area =
-          face.area(); // the cell's area is 1 in cell units: s = area (line 6)
+void overlayQuad(const ConvexPolygon& quad, std::int32_t polar_index, const OverlayGeometry& g,
+                 std::vector<Piece>* pieces) {
+  slice(quad, 0, g.width, [&](int column, const ConvexPolygon& strip) {
+    slice(strip, 1, g.height, [&](int row, const ConvexPolygon& face) {
+      const double area = face.area();  // the cell's area is 1 in cell units: s = area (line 6)
       if (area > kNegligibleArea) {
-        pieces->push_back(
-            {column + g.width * row, polar_index, static_cast<float>(area)});
+        pieces->push_back({column + g.width * row, polar_index, static_cast<float>(area)});
       }
     });
   });
 }
 
-} // namespace
+}  // namespace
 
-bool OverlayGeometry::operator==(const OverlayGeometry &o) const {
-  return beams == o.beams && cells == o.cells &&
-         range_resolution == o.range_resolution && angle_min == o.angle_min &&
-         angle_increment == o.angle_increment && sensor.x == o.sensor.x &&
-         sensor.y == o.sensor.y && sensor.yaw == o.sensor.yaw &&
-         resolution == o.resolution && origin_cell == o.origin_cell &&
-         width == o.width && height == o.height;
+bool OverlayGeometry::operator==(const OverlayGeometry& o) const {
+  return beams == o.beams && cells == o.cells && range_resolution == o.range_resolution &&
+         angle_min == o.angle_min && angle_increment == o.angle_increment &&
+         sensor.x == o.sensor.x && sensor.y == o.sensor.y && sensor.yaw == o.sensor.yaw &&
+         resolution == o.resolution && origin_cell == o.origin_cell && width == o.width &&
+         height == o.height;
 }
 
-OverlayGeometry OverlayGeometry::of(const PolarField &field,
-                                    const Pose2D &sensor,
-                                    const LogOddsRaster &raster) {
+OverlayGeometry OverlayGeometry::of(const PolarField& field, const Pose2D& sensor,
+                                    const LogOddsRaster& raster) {
   OverlayGeometry g;
   g.beams = field.beams;
   g.cells = field.cells;
@@ -158,12 +143,10 @@ OverlayGeometry OverlayGeometry::of(const PolarField &field,
   return g;
 }
 
-ExactOverlay::ExactOverlay(const OverlayGeometry &g) : geometry_(g) {
-  if (g.beams <= 0 || g.cells <= 0)
-    throw std::invalid_argument("ExactOverlay: empty polar grid");
+ExactOverlay::ExactOverlay(const OverlayGeometry& g) : geometry_(g) {
+  if (g.beams <= 0 || g.cells <= 0) throw std::invalid_argument("ExactOverlay: empty polar grid");
   if (!(g.angle_increment > 0.0 && g.angle_increment < 3.0)) {
-    throw std::invalid_argument(
-        "ExactOverlay: angle_increment must be in (0, 3) rad");
+    throw std::invalid_argument("ExactOverlay: angle_increment must be in (0, 3) rad");
   }
   if (!(g.resolution > 0.0) || g.width <= 0 || g.height <= 0) {
     throw std::invalid_argument("ExactOverlay: empty raster");
@@ -177,8 +160,7 @@ ExactOverlay::ExactOverlay(const OverlayGeometry &g) : geometry_(g) {
 
 #pragma omp parallel for schedule(dynamic, 4)
   for (int b = 0; b < g.beams; ++b) {
-    std::vector<Piece> &pieces =
-        per_thread[static_cast<std::size_t>(omp_get_thread_num())];
+    std::vector<Piece>& pieces = per_thread[static_cast<std::size_t>(omp_get_thread_num())];
     const double centre = g.sensor.yaw + g.angle_min + b * g.angle_increment;
     const double c0 = std::cos(centre - 0.5 * g.angle_increment);
     const double s0 = std::sin(centre - 0.5 * g.angle_increment);
@@ -187,7 +169,7 @@ ExactOverlay::ExactOverlay(const OverlayGeometry &g) : geometry_(g) {
     for (int k = 0; k < g.cells; ++k) {
       const double r0 = k * dr;
       const double r1 = (k + 1) * dr;
-      ConvexPolygon quad; // counter-clockwise
+      ConvexPolygon quad;  // counter-clockwise
       quad.push(sx + r0 * c0, sy + r0 * s0);
       quad.push(sx + r1 * c0, sy + r1 * s0);
       quad.push(sx + r1 * c1, sy + r1 * s1);
@@ -200,76 +182,78 @@ ExactOverlay::ExactOverlay(const OverlayGeometry &g) : geometry_(g) {
   // in parallel.
   const std::size_t cell_count = static_cast<std::size_t>(g.width) * g.height;
   cell_start_.assign(cell_count + 1, 0);
-  for (const auto &pieces : per_thread) {
-    for (const Piece &p : pieces)
-      ++cell_start_[static_cast<std::size_t>(p.cell) + 1];
+  for (const auto& pieces : per_thread) {
+    for (const Piece& p : pieces) ++cell_start_[static_cast<std::size_t>(p.cell) + 1];
   }
-  for (std::size_t i = 0; i < cell_count; ++i)
-    cell_start_[i + 1] += cell_start_[i];
+  for (std::size_t i = 0; i < cell_count; ++i) cell_start_[i + 1] += cell_start_[i];
   entries_.resize(static_cast<std::size_t>(cell_start_[cell_count]));
   std::vector<std::int64_t> next(cell_start_.begin(), cell_start_.end() - 1);
-  for (const auto &pieces : per_thread) {
-    for (const Piece &p : pieces) {
-      entries_[static_cast<std::size_t>(
-          next[static_cast<std::size_t>(p.cell)]++)] = {p.polar_index,
-                                                        p.weight};
+  for (const auto& pieces : per_thread) {
+    for (const Piece& p : pieces) {
+      entries_[static_cast<std::size_t>(next[static_cast<std::size_t>(p.cell)]++)] = {p.polar_index,
+                                                                                      p.weight};
     }
   }
 }
 
-void ExactOverlay::apply(const PolarField &field, LogOddsRaster *raster) const {
-  const OverlayGeometry &g = geometry_;
+void ExactOverlay::apply(const PolarField& field, LogOddsRaster* raster) const {
+  const OverlayGeometry& g = geometry_;
   if (field.beams != g.beams || field.cells != g.cells ||
-      field.range_resolution != g.range_resolution ||
-      field.angle_min != g.angle_min ||
+      field.range_resolution != g.range_resolution || field.angle_min != g.angle_min ||
       field.angle_increment != g.angle_increment) {
-    throw std::invalid_argument(
-        "ExactOverlay::apply: the polar field differs from the overlay's");
+    throw std::invalid_argument("ExactOverlay::apply: the polar field differs from the overlay's");
   }
-  if (raster->resolution != g.resolution ||
-      raster->origin_cell != g.origin_cell || raster->width != g.width ||
-      raster->height != g.height) {
-    throw std::invalid_argument(
-        "ExactOverlay::apply: the raster differs from the overlay's");
+  if (raster->resolution != g.resolution || raster->origin_cell != g.origin_cell ||
+      raster->width != g.width || raster->height != g.height) {
+    throw std::invalid_argument("ExactOverlay::apply: the raster differs from the overlay's");
   }
-  const int cell_count = g.width * g.height;
-  const float *value = field.value.data();
-  const float *observed = field.observed.data();
-#pragma omp parallel for schedule(static, 1024)
-  for (int cell = 0; cell < cell_count; ++cell) {
-    double sum = 0.0; // Eq. 5: g(r) = sum_i s_{i,r} f(i)
-    float coverage = 0.0f;
-    for (const Entry *e = entriesBegin(cell); e != entriesEnd(cell); ++e) {
-      sum += static_cast<double>(e->weight) * value[e->polar_index];
-      coverage += e->weight * observed[e->polar_index];
-    }
-    if (coverage > 0.0f) {
-      float &target = raster->data[static_cast<std::size_t>(cell)];
-      target = std::isnan(target) ? static_cast<float>(sum)
-                                  : target + static_cast<float>(sum);
+  // Only the tiles some observed polar cell can reach are gathered: the overlay covers the whole
+  // field of view, a scan indoors observes a small part of it.
+  const ReachableTiles tiles(field, g.sensor, *raster);
+  const std::vector<int>& list = tiles.tiles();
+  const int count = static_cast<int>(list.size());
+  const float* value = field.value.data();
+  const float* observed = field.observed.data();
+#pragma omp parallel for schedule(dynamic, 2)
+  for (int i = 0; i < count; ++i) {
+    const int column = list[static_cast<std::size_t>(i)] % tiles.columns();
+    const int row = list[static_cast<std::size_t>(i)] / tiles.columns();
+    const int x_end = std::min(g.width, (column + 1) * ReachableTiles::kSide);
+    const int y_end = std::min(g.height, (row + 1) * ReachableTiles::kSide);
+    for (int y = row * ReachableTiles::kSide; y < y_end; ++y) {
+      for (int x = column * ReachableTiles::kSide; x < x_end; ++x) {
+        const int cell = x + g.width * y;
+        double sum = 0.0;  // Eq. 5: g(r) = sum_i s_{i,r} f(i)
+        float coverage = 0.0f;
+        for (const Entry* e = entriesBegin(cell); e != entriesEnd(cell); ++e) {
+          sum += static_cast<double>(e->weight) * value[e->polar_index];
+          coverage += e->weight * observed[e->polar_index];
+        }
+        if (coverage > 0.0f) {
+          float& target = raster->data[static_cast<std::size_t>(cell)];
+          target = std::isnan(target) ? static_cast<float>(sum) : target + static_cast<float>(sum);
+        }
+      }
     }
   }
 }
 
-ExactOverlayCache::ExactOverlayCache(std::size_t capacity)
-    : capacity_(capacity) {
-  if (capacity_ == 0)
-    throw std::invalid_argument("ExactOverlayCache: capacity must be >= 1");
+ExactOverlayCache::ExactOverlayCache(std::size_t capacity) : capacity_(capacity) {
+  if (capacity_ == 0) throw std::invalid_argument("ExactOverlayCache: capacity must be >= 1");
 }
 
-const ExactOverlay &ExactOverlayCache::get(const OverlayGeometry &geometry) {
+const ExactOverlay& ExactOverlayCache::get(const OverlayGeometry& geometry) {
   for (auto it = overlays_.begin(); it != overlays_.end(); ++it) {
     if ((*it)->geometry() == geometry) {
       overlays_.splice(overlays_.begin(), overlays_,
-                       it); // most recently used first
+                       it);  // most recently used first
       return *overlays_.front();
     }
   }
   overlays_.push_front(std::make_unique<ExactOverlay>(geometry));
   ++builds_;
-  if (overlays_.size() > capacity_)
-    overlays_.pop_back();
+  if (overlays_.size() > capacity_) overlays_.pop_back();
   return *overlays_.front();
 }
 
-} // namespace occupancy_fusion
+}  // namespace occupancy_fusion

@@ -43,18 +43,15 @@ namespace occupancy_fusion {
 // an occupied cell, so cells up to no_return_free_length get min_log_ratio;
 // beyond, nothing. Too close (-inf) and invalid readings observe nothing.
 struct LaserSensorModelConfig {
-  double range_resolution = 0.05; // d_rho, m: length of a range cell
-  double range_sigma =
-      0.05; // sigma, m: standard deviation of the range error (>= 0)
-  double prior_occupancy =
-      0.5; // p: a priori occupancy of every cell (Eq. 3-4 use 1/2)
-  double min_log_ratio = -2.0; // lower clamp of L (free evidence per scan)
-  double max_log_ratio = 3.5;  // upper clamp of L (occupied evidence per scan)
-  double no_return_free_length =
-      0.0; // m: free length of a +inf beam; 0 = observes nothing
-  LaserRangeConfig ranges; // how out-of-limits finite readings are read
+  double range_resolution = 0.05;      // d_rho, m: length of a range cell
+  double range_sigma = 0.05;           // sigma, m: standard deviation of the range error (>= 0)
+  double prior_occupancy = 0.5;        // p: a priori occupancy of every cell (Eq. 3-4 use 1/2)
+  double min_log_ratio = -2.0;         // lower clamp of L (free evidence per scan)
+  double max_log_ratio = 3.5;          // upper clamp of L (occupied evidence per scan)
+  double no_return_free_length = 0.0;  // m: free length of a +inf beam; 0 = observes nothing
+  LaserRangeConfig ranges;             // how out-of-limits finite readings are read
 
-  void validate() const; // throws std::invalid_argument naming the bad field
+  void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
 // One beam's log-ratios for cells 0 .. log_ratio.size() - 1 (every later cell
@@ -65,7 +62,7 @@ struct BeamLogRatios {
 
 // Evaluates the model above for a detection at range r (m), in the log domain
 // so that q^z does not underflow for thousands of cells.
-BeamLogRatios hitLogRatios(double range, const LaserSensorModelConfig &config);
+BeamLogRatios hitLogRatios(double range, const LaserSensorModelConfig& config);
 
 // The Z-grid: one row of range cells per beam. value[b * cells + k] is L for
 // beam b, cell k, and observed[...] is 1 where the beam observed that cell,
@@ -73,15 +70,13 @@ BeamLogRatios hitLogRatios(double range, const LaserSensorModelConfig &config);
 // unobserved cells as "no information".
 struct PolarField {
   int beams = 0;
-  int cells = 0;                 // range cells per beam
-  double range_resolution = 0.0; // d_rho, m
-  double angle_min = 0.0;        // rad, centre of beam 0
-  double angle_increment =
-      0.0; // d_theta, rad; beam b covers angle(b) +- d_theta / 2
+  int cells = 0;                  // range cells per beam
+  double range_resolution = 0.0;  // d_rho, m
+  double angle_min = 0.0;         // rad, centre of beam 0
+  double angle_increment = 0.0;   // d_theta, rad; beam b covers angle(b) +- d_theta / 2
   std::vector<float> value;
   std::vector<float> observed;
-  std::vector<int>
-      observed_cells; // per beam: cells [0, observed_cells[b]) are observed
+  std::vector<int> observed_cells;  // per beam: cells [0, observed_cells[b]) are observed
 
   double angle(int beam) const { return angle_min + beam * angle_increment; }
   int index(int beam, int cell) const { return beam * cells + cell; }
@@ -89,11 +84,15 @@ struct PolarField {
 
 // Number of range cells the polar grid of a scan needs: every cell a beam can
 // observe.
-int polarCellCount(const LaserScan &scan, const LaserSensorModelConfig &config);
+int polarCellCount(const LaserScan& scan, const LaserSensorModelConfig& config);
 
 // Builds the Z-grid of a scan (REP-117 semantics as documented above).
 // Validates both.
-PolarField buildPolarField(const LaserScan &scan,
-                           const LaserSensorModelConfig &config);
+PolarField buildPolarField(const LaserScan& scan, const LaserSensorModelConfig& config);
+// The same into an existing field, reusing its buffers from the previous scan: only the cells
+// observed now, and those the previous scan observed and this one does not, are written, so a
+// stream of scans does not allocate or sweep the whole grid each time. Same result.
+void buildPolarField(const LaserScan& scan, const LaserSensorModelConfig& config,
+                     PolarField* field);
 
-} // namespace occupancy_fusion
+}  // namespace occupancy_fusion

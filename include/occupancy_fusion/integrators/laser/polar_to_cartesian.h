@@ -28,23 +28,51 @@ struct Pose2D {
 };
 
 enum class PolarToCartesianMethod {
-  kExact,    // Eq. 5 / Algorithm 1: area-weighted overlay, precomputed per
-             // geometry
-  kSampling, // Eq. 6: adaptive sampling, ns = dx^2 / (rho d_rho d_theta)
-             // samples per cell
-  kMipmap,   // Sec. IV: per-cell mipmapped lookup (the paper's GPU method),
-             // OpenMP
-  kLines,    // Bresenham line drawing, the baseline with the Moire effect
+  kExact,     // Eq. 5 / Algorithm 1: area-weighted overlay, precomputed per
+              // geometry
+  kSampling,  // Eq. 6: adaptive sampling, ns = dx^2 / (rho d_rho d_theta)
+              // samples per cell
+  kMipmap,    // Sec. IV: per-cell mipmapped lookup (the paper's GPU method),
+              // OpenMP
+  kLines,     // Bresenham line drawing, the baseline with the Moire effect
 };
 
-const char *methodName(
-    PolarToCartesianMethod method); // "exact", "sampling", "mipmap", "lines"
+const char* methodName(PolarToCartesianMethod method);  // "exact", "sampling", "mipmap", "lines"
 // Parses the names above; throws std::invalid_argument otherwise.
-PolarToCartesianMethod parsePolarToCartesianMethod(const std::string &name);
+PolarToCartesianMethod parsePolarToCartesianMethod(const std::string& name);
 
 // atan2 to within 1e-5 rad (a polynomial in min/max ratio), several times
 // faster than std::atan2; the per-cell methods call it once per cell or sample.
 double fastAtan2(double y, double x);
+
+// --- which raster cells a scan can reach
+// Per square tile of the raster (kSide x kSide cells), whether any observed polar cell can reach
+// it: the tile's nearest distance to the sensor against the farthest observed range of the beams
+// its angular span covers (widened by a margin for the filters of sampling and mipmap). Cells in
+// the other tiles get nothing from any method, so the per-cell methods skip them whole: a scan
+// indoors observes a few percent of a 60 m x 30 m grid.
+class ReachableTiles {
+ public:
+  static constexpr int kSide = 16;
+  // Tiles nearer to the sensor than always_within (m) count as reachable whatever was observed
+  // (the mipmap's safety radius writes its worst case there).
+  ReachableTiles(const PolarField& field, const Pose2D& sensor, const LogOddsRaster& raster,
+                 double always_within = 0.0);
+
+  int columns() const { return columns_; }
+  int rows() const { return rows_; }
+  bool reachable(int column, int row) const {
+    return reachable_[static_cast<std::size_t>(column + columns_ * row)] != 0;
+  }
+  // The reachable tiles, row by row: index = column + columns() * row.
+  const std::vector<int>& tiles() const { return tiles_; }
+
+ private:
+  int columns_ = 0;
+  int rows_ = 0;
+  std::vector<std::uint8_t> reachable_;
+  std::vector<int> tiles_;
+};
 
 // --- lines
 // ---------------------------------------------------------------------------------
@@ -53,8 +81,7 @@ double fastAtan2(double y, double x);
 // at their centre's distance. A cell crossed by several beams (near the sensor)
 // is updated once per beam; cells between beams (far from the sensor) get
 // nothing: the Moire effect.
-void projectLines(const PolarField &field, const Pose2D &sensor,
-                  LogOddsRaster *raster);
+void projectLines(const PolarField& field, const Pose2D& sensor, LogOddsRaster* raster);
 
 // --- adaptive sampling
 // --------------------------------------------------------------------- Each
@@ -63,8 +90,8 @@ void projectLines(const PolarField &field, const Pose2D &sensor,
 // sample takes the log-ratio of the polar cell it falls in (0 outside the field
 // of view or the observed range), and the cell gets their mean. Cells with no
 // observed sample get nothing.
-void projectSampling(const PolarField &field, const Pose2D &sensor,
-                     int max_samples_per_axis, LogOddsRaster *raster);
+void projectSampling(const PolarField& field, const Pose2D& sensor, int max_samples_per_axis,
+                     LogOddsRaster* raster);
 
 // --- mipmap (Sec. IV, V-A)
 // ----------------------------------------------------------------- The polar
@@ -78,41 +105,41 @@ void projectSampling(const PolarField &field, const Pose2D &sensor,
 // cell in the field of view takes the worst case: the largest log-ratio
 // observed by any beam within that radius.
 struct MipmapConfig {
-  double safety_radius = 0.3; // m (the paper's 30 cm)
+  double safety_radius = 0.3;  // m (the paper's 30 cm)
 
-  void validate() const; // throws std::invalid_argument naming the bad field
+  void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
 class PolarMipmap {
-public:
+ public:
   // Builds the levels needed for cells of size cell_size (m).
-  PolarMipmap(const PolarField &field, double cell_size);
+  PolarMipmap(const PolarField& field, double cell_size);
 
   int angleLevels() const { return angle_levels_; }
   // Bilinear lookup at level (a, r) at base coordinates u (beams: beam b spans
   // [b, b + 1)) and v (cells: cell k spans [k, k + 1)). Returns {value,
   // observed fraction}.
-  void lookup(int angle_level, int range_level, double u, double v,
-              float *value, float *observed) const;
+  void lookup(int angle_level, int range_level, double u, double v, float* value,
+              float* observed) const;
   bool hasRangeLevel(int range_level) const;
 
-private:
+ private:
   struct Level {
     int beams = 0;
     int cells = 0;
     std::vector<float> value;
     std::vector<float> observed;
   };
-  const Level &level(int angle_level, int range_level) const;
+  const Level& level(int angle_level, int range_level) const;
 
   int angle_levels_ = 0;
   int first_range_level_ = 0;
-  int range_levels_ = 0; // number of range levels kept, from first_range_level_
-  std::vector<Level> levels_; // [range level - first][angle level]
+  int range_levels_ = 0;       // number of range levels kept, from first_range_level_
+  std::vector<Level> levels_;  // [range level - first][angle level]
 };
 
-void projectMipmap(const PolarField &field, const Pose2D &sensor,
-                   const MipmapConfig &config, LogOddsRaster *raster);
+void projectMipmap(const PolarField& field, const Pose2D& sensor, const MipmapConfig& config,
+                   LogOddsRaster* raster);
 
 // --- exact overlay (Eq. 5, Algorithm 1)
 // ----------------------------------------------------- The polar mesh's convex
@@ -134,21 +161,20 @@ struct OverlayGeometry {
   int width = 0;
   int height = 0;
 
-  bool operator==(const OverlayGeometry &other) const;
-  static OverlayGeometry of(const PolarField &field, const Pose2D &sensor,
-                            const LogOddsRaster &raster);
+  bool operator==(const OverlayGeometry& other) const;
+  static OverlayGeometry of(const PolarField& field, const Pose2D& sensor,
+                            const LogOddsRaster& raster);
 };
 
 class ExactOverlay {
-public:
-  explicit ExactOverlay(
-      const OverlayGeometry &geometry); // computes the overlay
+ public:
+  explicit ExactOverlay(const OverlayGeometry& geometry);  // computes the overlay
 
-  const OverlayGeometry &geometry() const { return geometry_; }
+  const OverlayGeometry& geometry() const { return geometry_; }
   // Adds g(r) = sum_i s_{i,r} f(i) (Eq. 5) into every cell some observed polar
   // cell overlaps. The field and raster must match geometry() (throws
   // std::invalid_argument otherwise).
-  void apply(const PolarField &field, LogOddsRaster *raster) const;
+  void apply(const PolarField& field, LogOddsRaster* raster) const;
 
   // The overlay itself: for raster cell `cell` (x + width * y), the polar cells
   // (beam * cells + range cell) that overlap it and the overlapped fraction of
@@ -157,18 +183,13 @@ public:
     std::int32_t polar_index;
     float weight;
   };
-  const Entry *entriesBegin(int cell) const {
-    return entries_.data() + cell_start_[cell];
-  }
-  const Entry *entriesEnd(int cell) const {
-    return entries_.data() + cell_start_[cell + 1];
-  }
+  const Entry* entriesBegin(int cell) const { return entries_.data() + cell_start_[cell]; }
+  const Entry* entriesEnd(int cell) const { return entries_.data() + cell_start_[cell + 1]; }
   std::size_t entryCount() const { return entries_.size(); }
 
-private:
+ private:
   OverlayGeometry geometry_;
-  std::vector<std::int64_t>
-      cell_start_; // width * height + 1 offsets into entries_
+  std::vector<std::int64_t> cell_start_;  // width * height + 1 offsets into entries_
   std::vector<Entry> entries_;
 };
 
@@ -176,17 +197,16 @@ private:
 // goes first), so a fixed sensor-to-grid geometry, as in the vehicle grid,
 // computes its overlay once.
 class ExactOverlayCache {
-public:
+ public:
   explicit ExactOverlayCache(std::size_t capacity = 4);
-  const ExactOverlay &get(const OverlayGeometry &geometry);
+  const ExactOverlay& get(const OverlayGeometry& geometry);
   std::size_t size() const { return overlays_.size(); }
-  std::size_t builds() const { return builds_; } // overlays computed so far
+  std::size_t builds() const { return builds_; }  // overlays computed so far
 
-private:
+ private:
   std::size_t capacity_;
   std::size_t builds_ = 0;
-  std::list<std::unique_ptr<ExactOverlay>>
-      overlays_; // most recently used first
+  std::list<std::unique_ptr<ExactOverlay>> overlays_;  // most recently used first
 };
 
-} // namespace occupancy_fusion
+}  // namespace occupancy_fusion
