@@ -1,0 +1,255 @@
+// Checks the map that the MapServer publishes, fed by the DisparityMapper with the Simulator's
+// stereo camera in the room scene, against the scene's analytic ground truth; then that malformed
+// disparity images (wrong encoding, a size that does not fit camera_info) are dropped, leave the
+// map as it was, and do not stop the mapper.
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <std_srvs/SetBool.h>
+#include <stereo_msgs/DisparityImage.h>
+
+#include "occupancy_fusion/sim/scenes.h"
+
+namespace occupancy_fusion {
+namespace {
+
+struct Settings {
+  int min_images = 40;
+  double resolution = 0.1;
+  double min_z = 0.05;
+  double max_z = 2.0;
+  std::string disparity_topic = "stereo/disparity";
+  std::string optical_frame = "stereo_left_optical_frame";
+};
+
+// The DisparityMapper's counters, from /diagnostics.
+struct MapperCounters {
+  std::size_t integrated = 0;
+  std::size_t dropped_invalid = 0;
+  std::string map_version;
+  ros::WallTime received;
+};
+
+// Keeps the latest published grid and voxel centres and the mapper's latest counters.
+class MapObserver {
+ public:
+  explicit MapObserver(ros::NodeHandle& node_handle) {
+    grid_sub_ = node_handle.subscribe("projected_map", 1, &MapObserver::onGrid, this);
+    cloud_sub_ =
+        node_handle.subscribe("octomap_point_cloud_centers", 1, &MapObserver::onCloud, this);
+    diagnostics_sub_ = node_handle.subscribe("/diagnostics", 10, &MapObserver::onDiagnostics, this);
+  }
+
+  nav_msgs::OccupancyGrid::ConstPtr grid() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return grid_;
+  }
+  sensor_msgs::PointCloud2::ConstPtr cloud() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return cloud_;
+  }
+  MapperCounters counters() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return counters_;
+  }
+
+ private:
+  void onGrid(const nav_msgs::OccupancyGrid::ConstPtr& grid) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    grid_ = grid;
+  }
+  void onCloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cloud_ = cloud;
+  }
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
+    for (const auto& status : array->status) {
+      const std::string suffix = "disparity mapping";
+      if (status.name.size() < suffix.size() ||
+          status.name.compare(status.name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+        continue;
+      }
+      std::map<std::string, std::string> values;
+      for (const auto& entry : status.values) values[entry.key] = entry.value;
+      std::lock_guard<std::mutex> lock(mutex_);
+      counters_.integrated = std::stoul(values.at("images integrated"));
+      counters_.dropped_invalid = std::stoul(values.at("images dropped (invalid)"));
+      counters_.map_version = values.at("map version");
+      counters_.received = ros::WallTime::now();
+    }
+  }
+
+  mutable std::mutex mutex_;
+  nav_msgs::OccupancyGrid::ConstPtr grid_;
+  sensor_msgs::PointCloud2::ConstPtr cloud_;
+  MapperCounters counters_;
+  ros::Subscriber grid_sub_, cloud_sub_, diagnostics_sub_;
+};
+
+Settings g_settings;
+MapObserver* g_observer = nullptr;
+ros::Publisher* g_disparity_publisher = nullptr;
+
+bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
+  while (ros::ok() && ros::WallTime::now() < deadline) {
+    if (condition()) return true;
+    ros::WallDuration(0.05).sleep();
+  }
+  return condition();
+}
+
+bool setPaused(bool paused) {
+  std_srvs::SetBool pause;
+  pause.request.data = paused;
+  return ros::service::call("/simulator/pause", pause) && pause.response.success;
+}
+
+std::vector<Eigen::Vector3d> cloudPoints(const sensor_msgs::PointCloud2& cloud) {
+  std::vector<Eigen::Vector3d> points;
+  sensor_msgs::PointCloud2ConstIterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (; x != x.end(); ++x, ++y, ++z) points.emplace_back(*x, *y, *z);
+  return points;
+}
+
+// Whether the vertical segment over (x, y) within the height band meets a solid.
+bool columnHitsSolid(const sim::Scene& scene, const Eigen::Vector2d& xy) {
+  const double step = 0.25 * g_settings.resolution;
+  for (double z = g_settings.min_z; z <= g_settings.max_z; z += step) {
+    if (scene.isOccupied({xy.x(), xy.y(), z})) return true;
+  }
+  return false;
+}
+
+// A disparity image of the optical frame stamped now, every pixel at 10 px (a surface 1.6 m in
+// front of the simulated camera): integrated, it would change the map.
+stereo_msgs::DisparityImage plausibleDisparity(int width, int height) {
+  stereo_msgs::DisparityImage message;
+  message.header.frame_id = g_settings.optical_frame;
+  message.header.stamp = ros::Time::now();
+  message.image.header = message.header;
+  message.image.width = static_cast<std::uint32_t>(width);
+  message.image.height = static_cast<std::uint32_t>(height);
+  message.image.encoding = "32FC1";
+  message.image.step = static_cast<std::uint32_t>(width * sizeof(float));
+  const std::vector<float> values(static_cast<std::size_t>(width) * height, 10.0f);
+  message.image.data.resize(values.size() * sizeof(float));
+  std::memcpy(message.image.data.data(), values.data(), message.image.data.size());
+  message.f = 262.4f;
+  message.T = 0.12f;
+  message.min_disparity = 0.0f;
+  message.max_disparity = static_cast<float>(width);
+  return message;
+}
+
+TEST(SimDisparityMapping, MapMatchesGroundTruth) {
+  ASSERT_TRUE(waitUntil(
+      [] { return g_observer->counters().integrated >= std::size_t(g_settings.min_images); }, 90.0))
+      << "only " << g_observer->counters().integrated << " disparity images integrated";
+  ASSERT_TRUE(setPaused(true));
+  // Let images in flight be integrated and published; then the map stays as it is.
+  ros::WallDuration(2.0).sleep();
+  const sensor_msgs::PointCloud2::ConstPtr cloud = g_observer->cloud();
+  const nav_msgs::OccupancyGrid::ConstPtr grid = g_observer->grid();
+  ASSERT_TRUE(cloud && grid);
+  const sim::Scene scene = sim::makeRoomScene();
+
+  // Occupied voxel centres lie on the scene's surfaces: within a voxel diagonal (the centre of a
+  // voxel that a surface crosses) plus the depth noise at 4 m (sigma_z = 0.2 px / (0.12 m *
+  // 262.4 px) * (4 m)^2 = 0.1 m).
+  const std::vector<Eigen::Vector3d> centres = cloudPoints(*cloud);
+  const double tolerance = std::sqrt(3.0) * g_settings.resolution + 0.1;
+  std::size_t near = 0;
+  for (const Eigen::Vector3d& c : centres) near += scene.distanceToSurface(c) <= tolerance;
+  const double near_fraction = centres.empty() ? 0.0 : double(near) / centres.size();
+  ROS_INFO("%zu occupied voxels, %.2f %% within %.2f m of a surface", centres.size(),
+           100.0 * near_fraction, tolerance);
+  EXPECT_GE(centres.size(), 8000u);
+  EXPECT_GE(near_fraction, 0.95);
+
+  // Free cells of the projected grid are free in the scene over the whole height band.
+  std::size_t free_cells = 0, free_correct = 0;
+  for (int y = 0; y < static_cast<int>(grid->info.height); ++y) {
+    for (int x = 0; x < static_cast<int>(grid->info.width); ++x) {
+      if (grid->data[static_cast<std::size_t>(x + grid->info.width * y)] != 0) continue;
+      const Eigen::Vector2d centre(
+          grid->info.origin.position.x + (x + 0.5) * grid->info.resolution,
+          grid->info.origin.position.y + (y + 0.5) * grid->info.resolution);
+      ++free_cells;
+      free_correct += columnHitsSolid(scene, centre) ? 0 : 1;
+    }
+  }
+  ROS_INFO("grid: %zu free cells, %.2f %% free in the scene", free_cells,
+           100.0 * free_correct / std::max<std::size_t>(free_cells, 1));
+  EXPECT_GE(free_cells, 800u);
+  EXPECT_GE(double(free_correct) / free_cells, 0.98);
+}
+
+TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
+  ASSERT_TRUE(setPaused(true));
+  ros::WallDuration(2.0).sleep();  // images in flight integrated, counters published
+  const MapperCounters before = g_observer->counters();
+  ASSERT_GT(before.integrated, 0u);
+
+  // Wrong encoding: 16-bit data of the camera's size.
+  stereo_msgs::DisparityImage wrong_encoding = plausibleDisparity(160, 240);
+  wrong_encoding.image.width = 320;
+  wrong_encoding.image.encoding = "16UC1";
+  wrong_encoding.image.step = 320 * 2;
+  g_disparity_publisher->publish(wrong_encoding);
+  // Right encoding, but a size the camera_info (320 x 240) does not describe.
+  g_disparity_publisher->publish(plausibleDisparity(100, 80));
+
+  ASSERT_TRUE(waitUntil(
+      [&] { return g_observer->counters().dropped_invalid >= before.dropped_invalid + 2; }, 10.0))
+      << "dropped " << g_observer->counters().dropped_invalid - before.dropped_invalid;
+  const MapperCounters after = g_observer->counters();
+  EXPECT_EQ(after.integrated, before.integrated);
+  EXPECT_EQ(after.map_version, before.map_version);  // not a single voxel written
+
+  // The mapper goes on with good images.
+  ASSERT_TRUE(setPaused(false));
+  EXPECT_TRUE(
+      waitUntil([&] { return g_observer->counters().integrated > after.integrated; }, 10.0));
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "sim_disparity_mapping_test");
+  ros::NodeHandle node_handle;
+  ros::NodeHandle private_node_handle("~");
+  occupancy_fusion::Settings& settings = occupancy_fusion::g_settings;
+  private_node_handle.param("min_images", settings.min_images, settings.min_images);
+  private_node_handle.param("resolution", settings.resolution, settings.resolution);
+  private_node_handle.param("occupancy_min_z", settings.min_z, settings.min_z);
+  private_node_handle.param("occupancy_max_z", settings.max_z, settings.max_z);
+  private_node_handle.param("disparity_topic", settings.disparity_topic, settings.disparity_topic);
+  private_node_handle.param("optical_frame", settings.optical_frame, settings.optical_frame);
+  occupancy_fusion::MapObserver observer(node_handle);
+  occupancy_fusion::g_observer = &observer;
+  // Advertised now, so the mapper is connected long before the malformed images go out.
+  ros::Publisher disparity_publisher =
+      node_handle.advertise<stereo_msgs::DisparityImage>(settings.disparity_topic, 2);
+  occupancy_fusion::g_disparity_publisher = &disparity_publisher;
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  spinner.stop();
+  return result;
+}
