@@ -31,6 +31,7 @@ namespace occupancy_fusion {
 int runPublish(const CommandLine& args);  // benchmark_publish.cpp
 int runDepth(const CommandLine& args);    // benchmark_depth.cpp
 int runLaser(const CommandLine& args);    // benchmark_laser.cpp
+int runLaserMap(const CommandLine& args);  // benchmark_laser_map.cpp
 
 namespace {
 
@@ -227,11 +228,21 @@ const std::vector<Workload>& workloads() {
        runDepth},
       {"laser",
        "<CARMEN log, .gz accepted> [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"
+       "      [--images PREFIX [--image_scan I]]\n"
        "      Yguel et al.'s Table I: each scan into a 60 m x 30 m grid by the exact, lines,\n"
        "      sampling and mipmap polar-to-cartesian methods; errors against exact, ms per scan;\n"
        "      and four scanners fused into the vehicle grid per cycle",
-       {"folder", "scans", "resolution", "sigma", "free_length", "range_max", "range_resolution"},
+       {"folder", "scans", "resolution", "sigma", "free_length", "range_max", "range_resolution",
+        "images", "image_scan"},
        runLaser},
+      {"laser-map",
+       "<CARMEN log, .gz accepted> --output PNG [--method mipmap|sampling|lines|exact]\n"
+       "      [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"
+       "      every scan of the log at its corrected pose into one world-frame GridLayer2D,\n"
+       "      drawn to PNG (free white, occupied black, unknown grey); ms per scan",
+       {"folder", "output", "method", "scans", "resolution", "sigma", "free_length", "range_max",
+        "range_resolution"},
+       runLaserMap},
   };
   return table;
 }
