@@ -1,0 +1,331 @@
+// LaserMapper nodelet: one sensor_msgs/LaserScan subscriber and tf2 message filter per
+// observation source (costmap_2d's style); every scan goes through Yguel et al.'s polar laser
+// integrator into two products:
+//  - the shared map's world-frame 2D layer (scanner pose in the map frame), which the MapServer's
+//    projected_map shows fused with the 3D map;
+//  - the vehicle-frame local grid (the paper's V-grid, scanner pose in the vehicle frame), fused
+//    every cycle from the latest scan of each source and published as `local_grid`
+//    (nav_msgs/OccupancyGrid) while it has subscribers.
+// With ~publish_map it also publishes the shared map itself, for a mapper running alone.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <message_filters/subscriber.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <nodelet/nodelet.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+#include <tf2_ros/transform_listener.h>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/params/laser_config_reader.h"
+#include "occupancy_fusion/ros/map_publisher.h"
+#include "occupancy_fusion/ros/ros_parameter_source.h"
+#include "occupancy_fusion/ros/shared_map_access.h"
+
+namespace occupancy_fusion {
+namespace {
+
+using ScanMessage = sensor_msgs::LaserScan;
+
+// The scan as the core reads it (angle_increment > 0: a driver's negative increment is the same
+// scan listed backwards). Throws std::invalid_argument naming the problem.
+LaserScan coreScan(const ScanMessage& message) {
+  const double increment = message.angle_increment;
+  if (!std::isfinite(increment) || increment == 0.0) {
+    throw std::invalid_argument("angle_increment is " + std::to_string(increment) +
+                                " (must be finite and non-zero)");
+  }
+  const std::size_t count = message.ranges.size();
+  if (count == 0) throw std::invalid_argument("no ranges");
+  // The last beam must point at angle_max (float fields: within half an increment).
+  const double last_angle = message.angle_min + (static_cast<double>(count) - 1.0) * increment;
+  if (!(std::abs(last_angle - message.angle_max) <= 0.5 * std::abs(increment))) {
+    const double expected = std::round((message.angle_max - message.angle_min) / increment) + 1.0;
+    throw std::invalid_argument(std::to_string(count) + " ranges, but angle_min, angle_max and " +
+                                "angle_increment describe " + std::to_string(expected) + " beams");
+  }
+  LaserScan scan = toLaserScan(message);
+  if (increment < 0.0) {
+    scan.angle_min = last_angle;
+    scan.angle_increment = -increment;
+    std::reverse(scan.ranges.begin(), scan.ranges.end());
+  }
+  scan.validate();
+  return scan;
+}
+
+bool isFinite(const Eigen::Isometry3d& pose) { return pose.matrix().allFinite(); }
+
+// Log-ratio sum (Eq. 8) of one scanner's grid into the fused grid; NaN means no information.
+void addLogRatios(const LogOddsRaster& from, LogOddsRaster* into) {
+  for (std::size_t i = 0; i < into->data.size(); ++i) {
+    const float value = from.data[i];
+    if (std::isnan(value)) continue;
+    into->data[i] = std::isnan(into->data[i]) ? value : into->data[i] + value;
+  }
+}
+
+// Occupancy probability in percent, p = 1 / (1 + exp(-L)); -1 where unknown.
+void toOccupancyGrid(const LogOddsRaster& raster, nav_msgs::OccupancyGrid* grid) {
+  grid->info.resolution = static_cast<float>(raster.resolution);
+  grid->info.width = static_cast<std::uint32_t>(raster.width);
+  grid->info.height = static_cast<std::uint32_t>(raster.height);
+  grid->info.origin.position.x = raster.origin_cell.x() * raster.resolution;
+  grid->info.origin.position.y = raster.origin_cell.y() * raster.resolution;
+  grid->info.origin.orientation.w = 1.0;
+  grid->data.resize(raster.data.size());
+  for (std::size_t i = 0; i < raster.data.size(); ++i) {
+    const float log_ratio = raster.data[i];
+    grid->data[i] =
+        std::isnan(log_ratio)
+            ? std::int8_t{-1}
+            : static_cast<std::int8_t>(std::lround(100.0 / (1.0 + std::exp(-log_ratio))));
+  }
+}
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
+
+class LaserMapper : public nodelet::Nodelet {
+ private:
+  // One observation source: its subscriber, filter, integrator for the world layer, and its
+  // latest scan with its pose in the vehicle frame for the local grid.
+  struct Source {
+    LaserSourceConfig config;
+    std::unique_ptr<PolarLaserIntegrator> world_integrator;
+    message_filters::Subscriber<ScanMessage> subscriber;
+    std::unique_ptr<tf2_ros::MessageFilter<ScanMessage>> filter;
+    // Guarded by LaserMapper::local_mutex_:
+    std::unique_ptr<LocalLaserGrid> local_grid;  // one scanner: this source at `mount`
+    std::optional<Pose2D> mount;                 // the scanner in the vehicle frame
+    LaserScan latest;                            // in the mount's orientation
+    ros::Time latest_stamp;
+    std::atomic<std::size_t> integrated{0};
+    std::atomic<std::size_t> dropped{0};   // no transform in time
+    std::atomic<std::size_t> rejected{0};  // bad scan or pose, tilted scanner, failed lookup
+  };
+
+  void onInit() override {
+    const RosParameterSource parameters(getPrivateNodeHandle());
+    int queue_size = 5;
+    bool publish_map = false;
+    try {
+      map_ = acquireSharedMap(parameters, getName());
+      config_ = readLaserMapperConfig(parameters);
+      parameters.get("queue_size", &queue_size);
+      if (queue_size < 1) throw std::invalid_argument("queue_size must be >= 1");
+      parameters.get("publish_map", &publish_map);
+      if (publish_map) {
+        map_publisher_ =
+            std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(), getName(), map_,
+                                           readMapPublisherConfig(parameters));
+      }
+    } catch (const std::invalid_argument& error) {
+      NODELET_FATAL("invalid parameter: %s", error.what());
+      throw;
+    }
+    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
+    for (const LaserSourceConfig& source : config_.sources) subscribe(source, queue_size);
+    startLocalGrid();
+    startDiagnostics();
+    NODELET_INFO("mapping %zu laser source(s) into map '%s' (frame '%s') and a local grid in '%s'",
+                 sources_.size(), map_->name().c_str(), map_->frameId().c_str(),
+                 config_.local_grid.frame_id.c_str());
+  }
+
+  void subscribe(const LaserSourceConfig& config, int queue_size) {
+    sources_.push_back(std::make_unique<Source>());
+    Source* source = sources_.back().get();
+    source->config = config;
+    source->world_integrator = std::make_unique<PolarLaserIntegrator>(config.integrator);
+    source->subscriber.subscribe(getNodeHandle(), config.topic, queue_size);
+    // Callbacks run on this nodelet's queue (the node handle's), not on the tf thread.
+    source->filter = std::make_unique<tf2_ros::MessageFilter<ScanMessage>>(
+        source->subscriber, *tf_buffer_, config_.local_grid.frame_id, queue_size, getNodeHandle());
+    std::vector<std::string> targets = {config_.local_grid.frame_id};
+    if (config_.write_world_layer) targets.push_back(map_->frameId());
+    source->filter->setTargetFrames(targets);
+    source->filter->registerCallback(
+        [this, source](const ScanMessage::ConstPtr& scan) { onScan(*scan, source); });
+    source->filter->registerFailureCallback(
+        [this, source](const ScanMessage::ConstPtr& scan,
+                       tf2_ros::filter_failure_reasons::FilterFailureReason) {
+          ++source->dropped;
+          NODELET_WARN_THROTTLE(5.0, "source '%s': no transform from '%s' at %.3f: scan dropped",
+                                source->config.name.c_str(), scan->header.frame_id.c_str(),
+                                scan->header.stamp.toSec());
+        });
+  }
+
+  // The scanner's pose in `frame` as the core's planar pose; the scan mirrored when the scanner
+  // is upside down in that frame (REP-103: it then sweeps clockwise).
+  Pose2D planarPoseIn(const std::string& frame, const std::string& sensor_frame,
+                      const ros::Time& stamp, double max_tilt, bool* upside_down) const {
+    const Eigen::Isometry3d pose =
+        tf2::transformToEigen(tf_buffer_->lookupTransform(frame, sensor_frame, stamp));
+    if (!isFinite(pose)) {
+      throw std::invalid_argument("pose of '" + sensor_frame + "' in '" + frame +
+                                  "' is not finite");
+    }
+    return planarPose(pose, max_tilt, upside_down);
+  }
+
+  void onScan(const ScanMessage& message, Source* source) {
+    const auto start = std::chrono::steady_clock::now();
+    const std::string& sensor_frame =
+        source->config.sensor_frame.empty() ? message.header.frame_id : source->config.sensor_frame;
+    try {
+      const LaserScan scan = coreScan(message);
+      // Both poses first, so a failed lookup leaves both products untouched.
+      bool upside_in_vehicle = false, upside_in_map = false;
+      const Pose2D in_vehicle =
+          planarPoseIn(config_.local_grid.frame_id, sensor_frame, message.header.stamp,
+                       source->config.max_tilt, &upside_in_vehicle);
+      std::optional<Pose2D> in_map;
+      if (config_.write_world_layer) {
+        in_map = planarPoseIn(map_->frameId(), sensor_frame, message.header.stamp,
+                              source->config.max_tilt, &upside_in_map);
+      }
+      if (in_map) {
+        source->world_integrator->integrateIntoLayer(upside_in_map ? mirrorScan(scan) : scan,
+                                                     *in_map, &map_->layer());
+      }
+      keepForLocalGrid(upside_in_vehicle ? mirrorScan(scan) : scan, in_vehicle,
+                       message.header.stamp, source);
+    } catch (const std::exception& error) {  // bad scan, tf2 lookup, tilted scanner
+      ++source->rejected;
+      NODELET_ERROR_THROTTLE(5.0, "source '%s' (topic '%s'): scan dropped: %s",
+                             source->config.name.c_str(), source->config.topic.c_str(),
+                             error.what());
+      return;
+    }
+    ++source->integrated;
+    last_scan_ms_ = millisecondsSince(start);
+  }
+
+  // The scanners are fixed on the vehicle: the local grid (and its exact overlay) is rebuilt only
+  // when a source's mount changes.
+  void keepForLocalGrid(LaserScan scan, const Pose2D& mount, const ros::Time& stamp,
+                        Source* source) {
+    std::lock_guard<std::mutex> lock(local_mutex_);
+    constexpr double kMountTolerance = 1e-6;  // m and rad
+    const bool moved = !source->mount || std::abs(source->mount->x - mount.x) > kMountTolerance ||
+                       std::abs(source->mount->y - mount.y) > kMountTolerance ||
+                       std::abs(source->mount->yaw - mount.yaw) > kMountTolerance;
+    if (moved) {
+      source->local_grid =
+          std::make_unique<LocalLaserGrid>(config_.local_grid.grid, source->config.integrator);
+      source->local_grid->addScanner(mount);
+      source->mount = mount;
+    }
+    source->latest = std::move(scan);
+    source->latest_stamp = stamp;
+  }
+
+  void startLocalGrid() {
+    local_grid_publisher_ = getNodeHandle().advertise<nav_msgs::OccupancyGrid>("local_grid", 1);
+    local_grid_timer_ =
+        getNodeHandle().createTimer(ros::Duration(1.0 / config_.local_grid.publish_rate),
+                                    [this](const ros::TimerEvent&) { publishLocalGrid(); });
+  }
+
+  // One V-grid cycle: every source's latest scan through its own pose, log-ratios summed.
+  void publishLocalGrid() {
+    if (local_grid_publisher_.getNumSubscribers() == 0) return;
+    const auto start = std::chrono::steady_clock::now();
+    auto message = boost::make_shared<nav_msgs::OccupancyGrid>();
+    {
+      std::lock_guard<std::mutex> lock(local_mutex_);
+      std::optional<LogOddsRaster> fused;
+      ros::Time newest;
+      for (const auto& source : sources_) {
+        if (!source->local_grid) continue;  // no scan yet
+        const LogOddsRaster& grid = source->local_grid->fuse({source->latest});
+        if (!fused) {
+          fused = grid;
+        } else {
+          addLogRatios(grid, &*fused);
+        }
+        newest = std::max(newest, source->latest_stamp);
+      }
+      if (!fused) return;
+      toOccupancyGrid(*fused, message.get());
+      message->header.stamp = newest;  // the vehicle pose the grid belongs to
+    }
+    message->header.frame_id = config_.local_grid.frame_id;
+    message->info.map_load_time = message->header.stamp;
+    local_grid_publisher_.publish(message);
+    ++local_grid_cycles_;
+    last_local_grid_ms_ = millisecondsSince(start);
+  }
+
+  void startDiagnostics() {
+    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
+                                                                 getPrivateNodeHandle(), getName());
+    diagnostics_->setHardwareID("map '" + map_->name() + "'");
+    diagnostics_->add("laser mapping", this, &LaserMapper::fillDiagnostics);
+    diagnostics_timer_ = getNodeHandle().createTimer(
+        ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  }
+
+  void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    std::size_t integrated = 0, dropped = 0, rejected = 0;
+    for (const auto& source : sources_) {
+      integrated += source->integrated;
+      dropped += source->dropped;
+      rejected += source->rejected;
+      status.add(source->config.name + " scans integrated", source->integrated.load());
+      status.add(source->config.name + " scans without transform", source->dropped.load());
+      status.add(source->config.name + " scans rejected", source->rejected.load());
+    }
+    status.summary(integrated > 0 ? diagnostic_msgs::DiagnosticStatus::OK
+                                  : diagnostic_msgs::DiagnosticStatus::WARN,
+                   integrated > 0 ? "mapping" : "no scan integrated yet");
+    status.add("scans integrated", integrated);
+    status.add("scans without transform", dropped);
+    status.add("scans rejected", rejected);
+    status.add("last scan ms", last_scan_ms_.load());
+    status.add("local grid cycles", local_grid_cycles_.load());
+    status.add("last local grid ms", last_local_grid_ms_.load());
+  }
+
+  std::shared_ptr<SharedMap> map_;
+  LaserMapperConfig config_;
+  std::unique_ptr<MapPublisher> map_publisher_;
+  // Declared before the sources: their message filters unregister from the buffer when they go.
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::vector<std::unique_ptr<Source>> sources_;
+
+  std::mutex local_mutex_;
+  ros::Publisher local_grid_publisher_;
+  ros::Timer local_grid_timer_;
+
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::Timer diagnostics_timer_;
+  std::atomic<double> last_scan_ms_{0.0};
+  std::atomic<std::size_t> local_grid_cycles_{0};
+  std::atomic<double> last_local_grid_ms_{0.0};
+};
+
+}  // namespace occupancy_fusion
+
+PLUGINLIB_EXPORT_CLASS(occupancy_fusion::LaserMapper, nodelet::Nodelet)
