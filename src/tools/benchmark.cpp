@@ -32,6 +32,7 @@ int runPublish(const CommandLine& args);  // benchmark_publish.cpp
 int runDepth(const CommandLine& args);    // benchmark_depth.cpp
 int runLaser(const CommandLine& args);    // benchmark_laser.cpp
 int runLaserMap(const CommandLine& args);  // benchmark_laser_map.cpp
+int runDisparity(const CommandLine& args);  // benchmark_disparity.cpp
 
 namespace {
 
@@ -243,6 +244,19 @@ const std::vector<Workload>& workloads() {
        {"folder", "output", "method", "scans", "resolution", "sigma", "free_length", "range_max",
         "range_resolution"},
        runLaserMap},
+      {"disparity",
+       "<Middlebury scene folder, or a folder of them> [--resolution R[,R...]]\n"
+       "      [--input full,half,quarter] [--source gt,sgbm] [--frames N] [--warmup W]\n"
+       "      [--repetitions K] [--jitter M] [--jitter_deg D] [--sigma S] [--block_size B]\n"
+       "      [--threads T] [--clock cpu|wall] [--rtabmap FOLDER]\n"
+       "      [--picture PREFIX [--picture_scene S] [--picture_resolution R]]\n"
+       "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
+       "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
+       "      the same points; ratios are ours / octomap",
+       {"folder", "resolution", "input", "source", "frames", "warmup", "repetitions", "jitter",
+        "jitter_deg", "sigma", "block_size", "threads", "clock", "rtabmap", "picture",
+        "picture_scene", "picture_resolution"},
+       runDisparity},
   };
   return table;
 }

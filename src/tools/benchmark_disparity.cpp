@@ -1,0 +1,703 @@
+// benchmark disparity: Schauwecker & Zell's visibility-aware stereo integrator on real stereo
+// pairs (Middlebury 2014 scene folders, optionally the rtabmap pairs), against
+// octomap::OcTree::insertPointCloud (plain and discretize=true) on the same points, in the same
+// run. Each scene is mapped from its ground-truth disparity and from OpenCV's StereoSGBM on
+// im0/im1 (real matcher noise), at every resolution and input resolution; the same view is
+// integrated --frames times (a camera standing still; --jitter moves it a little between frames).
+#include <octomap/OcTree.h>
+#include <omp.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/map/occupancy_model.h"
+#include "occupancy_fusion/map/spatial_key.h"
+#include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/sensors/middlebury_folder.h"
+#include "occupancy_fusion/tools/command_line.h"
+
+namespace occupancy_fusion {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Process CPU time (all threads), ms. On a shared, loaded machine the wall time of a call is
+// mostly the scheduler's; with one thread the CPU time is the work itself.
+double cpuMilliseconds() { return 1e3 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+double medianOf(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::vector<std::string> splitList(const std::string& option, const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (item.empty()) throw UsageError("--" + option + ": empty item in '" + text + "'");
+    items.push_back(item);
+  }
+  if (items.empty()) throw UsageError("--" + option + " is empty");
+  return items;
+}
+
+std::vector<double> positiveNumbers(const std::string& option, const std::string& text) {
+  std::vector<double> values;
+  for (const std::string& item : splitList(option, text)) {
+    std::istringstream parser(item);
+    double value = 0.0;
+    if (!(parser >> value) || !parser.eof() || !(value > 0.0)) {
+      throw UsageError("--" + option + " needs positive numbers separated by commas");
+    }
+    values.push_back(value);
+  }
+  return values;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Disparity from the images: OpenCV's semi-global matcher.
+
+struct SgbmSettings {
+  int num_disparities = 80;  // px, a multiple of 16
+  int block_size = 5;        // px
+};
+
+// StereoSGBM on a rectified pair, as float disparity of the left image in px (its 1/16 px fixed
+// point divided out) plus offset_px; unmatched pixels (below minDisparity) become NaN.
+//   blockSize 5: the quarter-size Middlebury images have little texture per pixel; 3 px windows
+//     leave many wrong matches, 7 px and more round off the objects' edges.
+//   P1 = 8 * 3 * 5^2, P2 = 32 * 3 * 5^2: OpenCV's documented choice for 3-channel input (the
+//     smoothness penalties for disparity changes of 1 px and more).
+//   uniquenessRatio 10, speckleWindowSize 100, speckleRange 2, disp12MaxDiff 1: OpenCV's
+//     stereo_match sample; they reject ambiguous matches, small islands and left-right
+//     inconsistent pixels, but keep the matcher's errors on repetitive or untextured surfaces.
+//   MODE_SGBM_3WAY: the fast 3-way variant (a real-time matcher's choice).
+std::vector<float> sgbmDisparity(const std::string& left_path, const std::string& right_path,
+                                 const SgbmSettings& settings, float offset_px, int* width,
+                                 int* height) {
+  const cv::Mat left = cv::imread(left_path, cv::IMREAD_COLOR);
+  const cv::Mat right = cv::imread(right_path, cv::IMREAD_COLOR);
+  if (left.empty() || right.empty()) {
+    throw std::runtime_error("cannot read " + left_path + " / " + right_path);
+  }
+  const int block = settings.block_size;
+  const cv::Ptr<cv::StereoSGBM> matcher = cv::StereoSGBM::create(
+      0, settings.num_disparities, block, 8 * 3 * block * block, 32 * 3 * block * block, 1, 0, 10,
+      100, 2, cv::StereoSGBM::MODE_SGBM_3WAY);
+  cv::Mat fixed_point;
+  matcher->compute(left, right, fixed_point);  // CV_16S, disparity * 16
+  *width = fixed_point.cols;
+  *height = fixed_point.rows;
+  std::vector<float> disparity(fixed_point.total());
+  for (int v = 0; v < fixed_point.rows; ++v) {
+    for (int u = 0; u < fixed_point.cols; ++u) {
+      const short raw = fixed_point.at<short>(v, u);
+      disparity[static_cast<std::size_t>(v) * fixed_point.cols + u] =
+          raw >= 0 ? raw / 16.0f + offset_px : std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  return disparity;
+}
+
+// How far the matcher's disparity is from the ground truth where both exist.
+struct MatchQuality {
+  double valid_fraction = 0.0;  // matched pixels / ground-truth pixels
+  double bad2_fraction = 0.0;   // of pixels valid in both, error above 2 px (Middlebury's bad 2.0)
+  double median_error = 0.0;    // px
+};
+
+MatchQuality compareDisparity(const std::vector<float>& matched, const std::vector<float>& truth) {
+  std::size_t truth_count = 0, both = 0, bad = 0;
+  std::vector<double> errors;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    if (!std::isfinite(truth[i])) continue;
+    ++truth_count;
+    if (!std::isfinite(matched[i])) continue;
+    ++both;
+    const double error = std::abs(matched[i] - truth[i]);
+    bad += error > 2.0 ? 1 : 0;
+    errors.push_back(error);
+  }
+  MatchQuality quality;
+  quality.valid_fraction = truth_count == 0 ? 0.0 : static_cast<double>(both) / truth_count;
+  quality.bad2_fraction = both == 0 ? 0.0 : static_cast<double>(bad) / both;
+  quality.median_error = errors.empty() ? 0.0 : medianOf(errors);
+  return quality;
+}
+
+// ---------------------------------------------------------------------------------------------
+// One stereo view and the poses it is integrated from.
+
+struct StereoView {
+  std::string scene;
+  std::string source;  // "gt" or "sgbm"
+  int width = 0;
+  int height = 0;
+  std::vector<float> disparity;  // px, z = f * b / value, NaN = none
+  StereoCamera camera;
+
+  DisparityImageView view() const { return {width, height, disparity.data(), 0}; }
+};
+
+// Frame 0 at the identity; later frames moved by up to jitter_m along each axis and turned by up
+// to jitter_deg about a random axis (0: the camera stands still). Same seed: same poses for both
+// mappers.
+std::vector<Eigen::Isometry3d> framePoses(int frames, double jitter_m, double jitter_deg) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Eigen::Isometry3d> poses(frames, Eigen::Isometry3d::Identity());
+  for (int i = 1; i < frames; ++i) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(unit(random), unit(random), unit(random));
+    const double angle = jitter_deg * M_PI / 180.0 * unit(random);
+    if (axis.norm() > 1e-9)
+      poses[i].linear() = Eigen::AngleAxisd(angle, axis.normalized()).matrix();
+    poses[i].translation() = jitter_m * Eigen::Vector3d(unit(random), unit(random), unit(random));
+  }
+  return poses;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The two mappers on identical points.
+
+struct MapRun {
+  double ms_per_frame = 0.0;  // the clock chosen by --clock
+  double wall_ms_per_frame = 0.0;
+  double cpu_ms_per_frame = 0.0;
+  std::size_t memory_bytes = 0;
+  double cache_hit_rate = 0.0;
+  std::size_t points_per_frame = 0;
+};
+
+VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
+  VisibilityStereoConfig config;
+  config.disparity.disparity_sigma_px = sigma_px;
+  config.disparity.input_resolution = input;
+  return config;
+}
+
+MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& poses,
+               const VisibilityStereoIntegrator& integrator, VoxelMap* map) {
+  MapRun run;
+  std::size_t visits = 0, hits = 0;
+  const double cpu_start = cpuMilliseconds();
+  const auto start = Clock::now();
+  for (const Eigen::Isometry3d& pose : poses) {
+    const StereoIntegrationStats stats = integrator.integrate(view.view(), view.camera, pose, map);
+    visits += stats.voxel_visits;
+    hits += stats.cache_hits;
+    run.points_per_frame = stats.points - stats.skipped_points;
+  }
+  run.wall_ms_per_frame = millisecondsSince(start) / poses.size();
+  run.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / poses.size();
+  run.memory_bytes = map->memoryBytes();
+  run.cache_hit_rate = visits == 0 ? 0.0 : static_cast<double>(hits) / visits;
+  return run;
+}
+
+octomap::OcTree makeTree(double resolution) {
+  const OccupancyModel model;
+  octomap::OcTree tree(resolution);
+  tree.setProbHit(model.prob_hit);
+  tree.setProbMiss(model.prob_miss);
+  tree.setClampingThresMin(model.clamp_min);
+  tree.setClampingThresMax(model.clamp_max);
+  return tree;
+}
+
+// The points our integrator casts rays to (same conversion, same sub-sampling), per frame.
+std::vector<octomap::Pointcloud> octomapClouds(const StereoView& view,
+                                               const std::vector<Eigen::Isometry3d>& poses,
+                                               const VisibilityStereoIntegrator& integrator) {
+  std::vector<octomap::Pointcloud> clouds;
+  for (const Eigen::Isometry3d& pose : poses) {
+    std::vector<Eigen::Vector3f> points;
+    std::vector<float> sigmas;
+    std::size_t pixels = 0;
+    integrator.disparityToMapPoints(view.view(), view.camera, pose, &points, &sigmas, &pixels);
+    octomap::Pointcloud cloud;
+    cloud.reserve(points.size());
+    for (const Eigen::Vector3f& p : points) cloud.push_back(p.x(), p.y(), p.z());
+    clouds.push_back(std::move(cloud));
+  }
+  return clouds;
+}
+
+MapRun runOctomap(const std::vector<octomap::Pointcloud>& clouds,
+                  const std::vector<Eigen::Isometry3d>& poses, bool discretize,
+                  octomap::OcTree* tree) {
+  MapRun run;
+  const double cpu_start = cpuMilliseconds();
+  const auto start = Clock::now();
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    const Eigen::Vector3d o = poses[i].translation();
+    tree->insertPointCloud(clouds[i], octomap::point3d(o.x(), o.y(), o.z()), -1.0, false,
+                           discretize);
+  }
+  run.wall_ms_per_frame = millisecondsSince(start) / clouds.size();
+  run.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / clouds.size();
+  run.memory_bytes = tree->memoryUsage();
+  run.points_per_frame = clouds.empty() ? 0 : clouds.front().size();
+  return run;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Map quality: occupied voxels on and off the true surface.
+
+// The voxels holding the ground-truth points of the view at the identity pose, each with its
+// 26 neighbours (one voxel of slack for discretisation).
+SpatialKeySet trueSurface(const StereoView& truth, const VoxelMap& grid) {
+  DisparityConversionConfig config;
+  const StereoPoints points = disparityToPoints(truth.view(), truth.camera, config);
+  SpatialKeySet surface;
+  for (const Eigen::Vector3f& p : points.points) {
+    const VoxelIndex center = grid.indexOf(p.cast<double>());
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx)
+          surface.insert(packKey(VoxelIndex(center + VoxelIndex(dx, dy, dz))));
+      }
+    }
+  }
+  return surface;
+}
+
+// Occupied voxel centres of the tree at its finest resolution (pruned leaves expanded).
+std::vector<Eigen::Vector3d> occupiedCenters(const octomap::OcTree& tree) {
+  std::vector<Eigen::Vector3d> centers;
+  const double resolution = tree.getResolution();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const int cells = static_cast<int>(std::lround(it.getSize() / resolution));
+    const Eigen::Vector3d corner = Eigen::Vector3d(it.getX(), it.getY(), it.getZ()) -
+                                   Eigen::Vector3d::Constant(0.5 * it.getSize());
+    for (int z = 0; z < cells; ++z) {
+      for (int y = 0; y < cells; ++y) {
+        for (int x = 0; x < cells; ++x) {
+          centers.push_back(corner + resolution * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5));
+        }
+      }
+    }
+  }
+  return centers;
+}
+
+std::vector<Eigen::Vector3d> occupiedCenters(const VoxelMap& map) {
+  std::vector<Eigen::Vector3d> centers;
+  map.forEachOccupiedVoxel(
+      [&](const VoxelIndex& index, float) { centers.push_back(map.centerOf(index)); });
+  return centers;
+}
+
+std::size_t countOffSurface(const std::vector<Eigen::Vector3d>& centers,
+                            const SpatialKeySet& surface, const VoxelMap& grid) {
+  std::size_t off = 0;
+  for (const Eigen::Vector3d& c : centers) off += surface.count(packKey(grid.indexOf(c))) ? 0 : 1;
+  return off;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pictures: occupied voxels seen from the camera (front) and from above (top), coloured by depth.
+
+cv::Mat drawViews(const std::vector<Eigen::Vector3d>& centers, double resolution,
+                  const StereoCamera& camera, int width, int height, double z_min, double z_max,
+                  const std::string& title) {
+  const double scale = 0.5;  // picture px per image px (front view)
+  const int front_w = static_cast<int>(width * scale), front_h = static_cast<int>(height * scale);
+  const int top_h = front_h;
+  cv::Mat canvas(front_h + top_h + 24, front_w, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::Mat front_depth(front_h, front_w, CV_64F, cv::Scalar(std::numeric_limits<double>::max()));
+  std::vector<const Eigen::Vector3d*> order;
+  for (const Eigen::Vector3d& c : centers) order.push_back(&c);
+  std::sort(order.begin(), order.end(),
+            [](const Eigen::Vector3d* a, const Eigen::Vector3d* b) { return a->z() > b->z(); });
+  const auto colorOf = [&](double z) {
+    const double t = std::clamp((z - z_min) / (z_max - z_min), 0.0, 1.0);
+    cv::Mat value(1, 1, CV_8UC1, cv::Scalar(static_cast<int>(255 * t)));
+    cv::Mat color;
+    cv::applyColorMap(value, color, cv::COLORMAP_TURBO);
+    const cv::Vec3b bgr = color.at<cv::Vec3b>(0, 0);
+    return cv::Scalar(bgr[0], bgr[1], bgr[2]);
+  };
+  cv::Mat front = canvas(cv::Rect(0, 24, front_w, front_h));
+  cv::Mat top = canvas(cv::Rect(0, 24 + front_h, front_w, top_h));
+  cv::rectangle(top, cv::Rect(0, 0, front_w, top_h), cv::Scalar(235, 235, 235), cv::FILLED);
+  // Top view: x across as in the front view (the field of view at z_max), depth from z_min
+  // (bottom) to z_max (top).
+  const double x_lo = -camera.cx / camera.fx * z_max;
+  const double x_hi = (width - 1 - camera.cx) / camera.fx * z_max;
+  const double x_scale = front_w / (x_hi - x_lo);
+  const double z_scale = top_h / (z_max - z_min + 0.5);
+  for (const Eigen::Vector3d* c : order) {  // far to near: near voxels drawn last, on top
+    if (!(c->z() > 0.0)) continue;
+    const cv::Scalar color = colorOf(c->z());
+    const double u = (camera.fx * c->x() / c->z() + camera.cx) * scale;
+    const double v = (camera.fy * c->y() / c->z() + camera.cy) * scale;
+    const double half = 0.5 * resolution * camera.fx / c->z() * scale;
+    cv::rectangle(front, cv::Point2d(u - half, v - half), cv::Point2d(u + half, v + half), color,
+                  cv::FILLED);
+    const double tx = (c->x() - x_lo) * x_scale;
+    const double ty = top_h - (c->z() - z_min + 0.25) * z_scale;
+    const double th = std::max(1.0, 0.5 * resolution * x_scale);
+    cv::rectangle(top, cv::Point2d(tx - th, ty - th), cv::Point2d(tx + th, ty + th), color,
+                  cv::FILLED);
+  }
+  cv::putText(canvas, title, cv::Point(4, 17), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0),
+              1, cv::LINE_AA);
+  cv::putText(top, "top view (depth up)", cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+  return canvas;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The workload.
+
+struct Options {
+  std::vector<double> resolutions;
+  std::vector<InputResolution> inputs;
+  std::vector<std::string> sources;
+  int frames = 5;
+  int warmup = 0;  // untimed frames before the timed ones
+  int repetitions = 3;
+  double jitter_m = 0.0;
+  double jitter_deg = 0.0;
+  double sigma_px = 0.5;
+  SgbmSettings sgbm;
+  std::string picture;  // output file prefix; empty: none
+  std::string picture_scene;
+  double picture_resolution = 0.05;
+  int threads = 1;
+  bool cpu_clock = true;  // --clock cpu (process CPU time) or wall
+};
+
+struct CaseResult {
+  std::string scene, source;
+  double resolution = 0.0;
+  InputResolution input = InputResolution::kFull;
+  MapRun ours, plain, discretized;
+  std::size_t ours_occupied = 0, octomap_occupied = 0;
+  std::size_t ours_off_surface = 0, octomap_off_surface = 0;
+};
+
+CaseResult runCase(const StereoView& view, const StereoView& truth, double resolution,
+                   InputResolution input, const Options& options) {
+  const VisibilityStereoIntegrator integrator(stereoConfig(options.sigma_px, input));
+  const std::vector<Eigen::Isometry3d> poses =
+      framePoses(options.frames, options.jitter_m, options.jitter_deg);
+  const std::vector<octomap::Pointcloud> clouds = octomapClouds(view, poses, integrator);
+  VoxelMapConfig map_config;
+  map_config.resolution = resolution;
+  CaseResult result;
+  result.scene = view.scene;
+  result.source = view.source;
+  result.resolution = resolution;
+  result.input = input;
+  std::vector<double> ours_ms, plain_ms, discretized_ms;
+  std::vector<double> wall_ms[3];
+  for (int r = 0; r < options.repetitions; ++r) {
+    // Interleaved, so that the load of a shared machine falls on all three alike.
+    omp_set_num_threads(options.threads);  // insertPointCloud resets it
+    VoxelMap map(map_config);
+    octomap::OcTree plain_tree = makeTree(resolution);
+    octomap::OcTree discretized_tree = makeTree(resolution);
+    // Untimed frames first: the visibility method maps unknown space a few voxels deeper per
+    // frame (the paper's Fig. 5a), so its cost per frame grows until the view is mapped.
+    for (int w = 0; w < options.warmup; ++w) {
+      const std::vector<Eigen::Isometry3d> one{poses[w % poses.size()]};
+      const std::vector<octomap::Pointcloud> cloud{clouds[w % clouds.size()]};
+      runOurs(view, one, integrator, &map);
+      runOctomap(cloud, one, false, &plain_tree);
+      runOctomap(cloud, one, true, &discretized_tree);
+      omp_set_num_threads(options.threads);
+    }
+    result.ours = runOurs(view, poses, integrator, &map);
+    result.plain = runOctomap(clouds, poses, false, &plain_tree);
+    result.discretized = runOctomap(clouds, poses, true, &discretized_tree);
+    for (MapRun* run : {&result.ours, &result.plain, &result.discretized}) {
+      run->ms_per_frame = options.cpu_clock ? run->cpu_ms_per_frame : run->wall_ms_per_frame;
+      wall_ms[run == &result.ours    ? 0
+              : run == &result.plain ? 1
+                                     : 2]
+          .push_back(run->wall_ms_per_frame);
+    }
+    ours_ms.push_back(result.ours.ms_per_frame);
+    plain_ms.push_back(result.plain.ms_per_frame);
+    discretized_ms.push_back(result.discretized.ms_per_frame);
+    if (r + 1 == options.repetitions) {
+      const SpatialKeySet surface = trueSurface(truth, map);
+      const std::vector<Eigen::Vector3d> ours_occupied = occupiedCenters(map);
+      const std::vector<Eigen::Vector3d> octomap_occupied = occupiedCenters(plain_tree);
+      result.ours_occupied = ours_occupied.size();
+      result.octomap_occupied = octomap_occupied.size();
+      result.ours_off_surface = countOffSurface(ours_occupied, surface, map);
+      result.octomap_off_surface = countOffSurface(octomap_occupied, surface, map);
+    }
+  }
+  result.ours.ms_per_frame = medianOf(ours_ms);
+  result.plain.ms_per_frame = medianOf(plain_ms);
+  result.discretized.ms_per_frame = medianOf(discretized_ms);
+  result.ours.wall_ms_per_frame = medianOf(wall_ms[0]);
+  result.plain.wall_ms_per_frame = medianOf(wall_ms[1]);
+  result.discretized.wall_ms_per_frame = medianOf(wall_ms[2]);
+  return result;
+}
+
+void printCase(const char* prefix, const CaseResult& c) {
+  std::printf(
+      "%sscene=%s source=%s resolution=%g input=%s points=%zu ms_per_frame=%.2f "
+      "octomap_ms_per_frame=%.2f octomap_discretize_ms_per_frame=%.2f time_ratio=%.3f "
+      "time_ratio_discretize=%.3f memory_kb=%.0f octomap_memory_kb=%.0f memory_ratio=%.3f "
+      "cache_hit_rate=%.3f occupied=%zu off_surface=%zu octomap_occupied=%zu "
+      "octomap_off_surface=%zu wall_ms_per_frame=%.2f octomap_wall_ms_per_frame=%.2f\n",
+      prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(),
+      c.ours.points_per_frame, c.ours.ms_per_frame, c.plain.ms_per_frame,
+      c.discretized.ms_per_frame, c.ours.ms_per_frame / c.plain.ms_per_frame,
+      c.ours.ms_per_frame / c.discretized.ms_per_frame, c.ours.memory_bytes / 1024.0,
+      c.plain.memory_bytes / 1024.0,
+      static_cast<double>(c.ours.memory_bytes) / c.plain.memory_bytes, c.ours.cache_hit_rate,
+      c.ours_occupied, c.ours_off_surface, c.octomap_occupied, c.octomap_off_surface,
+      c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame);
+  std::fflush(stdout);
+}
+
+StereoView groundTruthView(const MiddleburyFolder& folder, const std::string& scene) {
+  const MiddleburyFrame frame = folder.frame(0);
+  StereoView view;
+  view.scene = scene;
+  view.source = "gt";
+  view.width = frame.width;
+  view.height = frame.height;
+  view.disparity = frame.disparity;
+  view.camera = folder.camera();
+  return view;
+}
+
+StereoView sgbmView(const MiddleburyFolder& folder, const std::string& scene,
+                    const SgbmSettings& settings) {
+  const std::string left = folder.leftImagePath(0), right = folder.rightImagePath(0);
+  if (left.empty() || right.empty()) throw std::runtime_error(scene + ": no im0/im1 for SGBM");
+  StereoView view;
+  view.scene = scene;
+  view.source = "sgbm";
+  view.camera = folder.camera();
+  SgbmSettings scene_settings = settings;
+  // Cover the scene's search range (calib.txt's ndisp) from 0, in steps of 16 as SGBM wants.
+  const int ndisp = folder.calibration().ndisp;
+  if (ndisp > 0) scene_settings.num_disparities = 16 * ((ndisp + 15) / 16);
+  view.disparity =
+      sgbmDisparity(left, right, scene_settings, static_cast<float>(folder.calibration().doffs),
+                    &view.width, &view.height);
+  return view;
+}
+
+void drawPicture(const StereoView& view, const StereoView& truth, const Options& options) {
+  const VisibilityStereoIntegrator integrator(
+      stereoConfig(options.sigma_px, InputResolution::kFull));
+  const std::vector<Eigen::Isometry3d> poses =
+      framePoses(options.frames + options.warmup, 0.0, 0.0);
+  VoxelMapConfig map_config;
+  map_config.resolution = options.picture_resolution;
+  VoxelMap map(map_config);
+  runOurs(view, poses, integrator, &map);
+  octomap::OcTree tree = makeTree(options.picture_resolution);
+  runOctomap(octomapClouds(view, poses, integrator), poses, false, &tree);
+  // Depth range of the true surface, for the colour scale.
+  const StereoPoints points = disparityToPoints(truth.view(), truth.camera, {});
+  std::vector<double> depths;
+  for (const Eigen::Vector3f& p : points.points) depths.push_back(p.z());
+  std::sort(depths.begin(), depths.end());
+  const double z_min = depths[depths.size() / 100], z_max = depths[depths.size() * 99 / 100];
+  const std::vector<Eigen::Vector3d> ours = occupiedCenters(map);
+  const std::vector<Eigen::Vector3d> octomap = occupiedCenters(tree);
+  char ours_title[160], octomap_title[160];
+  std::snprintf(ours_title, sizeof(ours_title), "visibility method: %zu occupied, %.0f KB",
+                ours.size(), map.memoryBytes() / 1024.0);
+  std::snprintf(octomap_title, sizeof(octomap_title),
+                "liboctomap insertPointCloud: %zu occupied, %.0f KB", octomap.size(),
+                tree.memoryUsage() / 1024.0);
+  cv::Mat left_panel = drawViews(ours, options.picture_resolution, view.camera, view.width,
+                                 view.height, z_min, z_max, ours_title);
+  cv::Mat right_panel = drawViews(octomap, options.picture_resolution, view.camera, view.width,
+                                  view.height, z_min, z_max, octomap_title);
+  cv::Mat picture;
+  cv::hconcat(
+      std::vector<cv::Mat>{left_panel, cv::Mat(left_panel.rows, 6, CV_8UC3, cv::Scalar(90, 90, 90)),
+                           right_panel},
+      picture);
+  const std::string path = options.picture + "_" + view.scene + "_" + view.source + ".png";
+  if (!cv::imwrite(path, picture, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
+    throw std::runtime_error("cannot write " + path);
+  }
+  std::printf("# picture %s: %s, %g m, %zu frames standing still, depth colours %.2f-%.2f m\n",
+              path.c_str(), view.source.c_str(), options.picture_resolution, poses.size(), z_min,
+              z_max);
+}
+
+// The rtabmap pairs: left/<id>.jpg, right/<id>.jpg, stereo_left.yaml, stereo_right.yaml.
+void runRtabmap(const std::string& folder, const Options& options) {
+  cv::FileStorage left_yaml((fs::path(folder) / "stereo_left.yaml").string(),
+                            cv::FileStorage::READ);
+  cv::FileStorage right_yaml((fs::path(folder) / "stereo_right.yaml").string(),
+                             cv::FileStorage::READ);
+  if (!left_yaml.isOpened() || !right_yaml.isOpened()) {
+    throw std::runtime_error(folder + ": cannot read stereo_left.yaml / stereo_right.yaml");
+  }
+  cv::Mat K, P_right;
+  left_yaml["camera_matrix"] >> K;
+  right_yaml["projection_matrix"] >> P_right;
+  StereoCamera camera;
+  camera.fx = K.at<double>(0, 0);
+  camera.fy = K.at<double>(1, 1);
+  camera.cx = K.at<double>(0, 2);
+  camera.cy = K.at<double>(1, 2);
+  camera.baseline = -P_right.at<double>(0, 3) / P_right.at<double>(0, 0);  // Tx = -fx * B
+  std::vector<std::string> ids;
+  for (const fs::directory_entry& entry : fs::directory_iterator(fs::path(folder) / "left")) {
+    if (entry.path().extension() == ".jpg") ids.push_back(entry.path().stem().string());
+  }
+  std::sort(ids.begin(), ids.end());
+  std::printf("# rtabmap pairs: fx=%.2f B=%.4f m, StereoSGBM 96 disparities (depth from %.2f m)\n",
+              camera.fx, camera.baseline, camera.fx * camera.baseline / 95.0);
+  SgbmSettings settings = options.sgbm;
+  settings.num_disparities = 96;
+  for (const std::string& id : ids) {
+    StereoView view;
+    view.scene = "rtabmap_" + id;
+    view.source = "sgbm";
+    view.camera = camera;
+    view.disparity = sgbmDisparity((fs::path(folder) / "left" / (id + ".jpg")).string(),
+                                   (fs::path(folder) / "right" / (id + ".jpg")).string(), settings,
+                                   0.0f, &view.width, &view.height);
+    for (double resolution : options.resolutions) {
+      for (InputResolution input : options.inputs) {
+        // No ground truth: the matched view stands in for the surface (off_surface counts 0).
+        printCase("rtabmap ", runCase(view, view, resolution, input, options));
+      }
+    }
+  }
+}
+
+}  // namespace
+
+int runDisparity(const CommandLine& args) {
+  Options options;
+  options.resolutions = positiveNumbers("resolution", args.value("resolution", "0.1,0.2"));
+  for (const std::string& name : splitList("input", args.value("input", "full,half,quarter"))) {
+    options.inputs.push_back(inputResolutionFromString(name));
+  }
+  options.sources = splitList("source", args.value("source", "gt,sgbm"));
+  for (const std::string& source : options.sources) {
+    if (source != "gt" && source != "sgbm") throw UsageError("--source takes gt and sgbm");
+  }
+  options.frames = args.intValue("frames", 5);
+  options.repetitions = args.intValue("repetitions", 3);
+  options.warmup = args.intValue("warmup", 0);
+  if (options.warmup < 0) throw UsageError("--warmup must not be negative");
+  options.jitter_m = args.doubleValue("jitter", 0.0);
+  options.jitter_deg = args.doubleValue("jitter_deg", 0.0);
+  options.sigma_px = args.doubleValue("sigma", 0.5);
+  options.sgbm.block_size = args.intValue("block_size", 5);
+  options.picture = args.value("picture", "");
+  options.picture_scene = args.value("picture_scene", "Motorcycle");
+  options.picture_resolution = args.doubleValue("picture_resolution", 0.05);
+  // One thread by default: liboctomap's insertPointCloud runs on one (Debian's build).
+  options.threads = args.intValue("threads", 1);
+  const std::string clock = args.value("clock", "cpu");
+  if (clock != "cpu" && clock != "wall") throw UsageError("--clock takes cpu or wall");
+  options.cpu_clock = clock == "cpu";
+  if (options.frames < 1 || options.repetitions < 1 || options.threads < 1) {
+    throw UsageError("--frames, --repetitions and --threads must be at least 1");
+  }
+  if (options.sgbm.block_size < 1 || options.sgbm.block_size % 2 == 0) {
+    throw UsageError("--block_size must be odd");
+  }
+
+  std::printf(
+      "# disparity: %d timed frames per case after %d untimed (jitter %g m, %g deg), median of %d "
+      "repetitions, "
+      "sigma_d=%g px, threads=%d (liboctomap: 1), SGBM block %d, clock=%s\n",
+      options.frames, options.warmup, options.jitter_m, options.jitter_deg, options.repetitions,
+      options.sigma_px, options.threads, options.sgbm.block_size,
+      options.cpu_clock ? "cpu" : "wall");
+  std::vector<CaseResult> results;
+  for (const std::string& scene_path : findMiddleburyScenes(args.required("folder"))) {
+    const MiddleburyFolder folder(scene_path);
+    const std::string scene = fs::path(scene_path).filename().string();
+    const StereoView truth = groundTruthView(folder, scene);
+    for (const std::string& source : options.sources) {
+      const StereoView view = source == "gt" ? truth : sgbmView(folder, scene, options.sgbm);
+      if (source == "sgbm") {
+        const MatchQuality quality = compareDisparity(view.disparity, truth.disparity);
+        std::printf(
+            "# %s sgbm: %.1f %% of the ground-truth pixels matched, bad2=%.1f %%, median "
+            "error %.2f px\n",
+            scene.c_str(), 100 * quality.valid_fraction, 100 * quality.bad2_fraction,
+            quality.median_error);
+      }
+      if (!options.picture.empty() && scene == options.picture_scene) {
+        drawPicture(view, truth, options);
+      }
+      for (double resolution : options.resolutions) {
+        for (InputResolution input : options.inputs) {
+          results.push_back(runCase(view, truth, resolution, input, options));
+          printCase("# ", results.back());
+        }
+      }
+    }
+  }
+  if (args.has("rtabmap")) runRtabmap(args.value("rtabmap"), options);
+
+  // Summary: per source, resolution and input, over the scenes (total time and memory).
+  for (const std::string& source : options.sources) {
+    for (double resolution : options.resolutions) {
+      for (InputResolution input : options.inputs) {
+        double ours_ms = 0, plain_ms = 0, discretized_ms = 0, ours_mem = 0, octomap_mem = 0;
+        int scenes = 0;
+        for (const CaseResult& c : results) {
+          if (c.source != source || c.resolution != resolution || c.input != input) continue;
+          ours_ms += c.ours.ms_per_frame;
+          plain_ms += c.plain.ms_per_frame;
+          discretized_ms += c.discretized.ms_per_frame;
+          ours_mem += c.ours.memory_bytes;
+          octomap_mem += c.plain.memory_bytes;
+          ++scenes;
+        }
+        if (scenes == 0) continue;
+        std::printf(
+            "disparity resolution=%g input=%s ms_per_frame=%.2f octomap_ms_per_frame=%.2f "
+            "time_ratio=%.3f memory_ratio=%.3f source=%s scenes=%d "
+            "octomap_discretize_ms_per_frame=%.2f time_ratio_discretize=%.3f threads=%d clock=%s "
+            "warmup=%d\n",
+            resolution, toString(input).c_str(), ours_ms / scenes, plain_ms / scenes,
+            ours_ms / plain_ms, ours_mem / octomap_mem, source.c_str(), scenes,
+            discretized_ms / scenes, ours_ms / discretized_ms, options.threads,
+            options.cpu_clock ? "cpu" : "wall", options.warmup);
+      }
+    }
+  }
+  return 0;
+}
+
+}  // namespace occupancy_fusion
