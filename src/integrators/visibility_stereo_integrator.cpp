@@ -10,9 +10,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include <tsl/robin_map.h>
-
 #include "occupancy_fusion/integrators/ray_traversal.h"
+#include "occupancy_fusion/map/spatial_key.h"
 
 namespace occupancy_fusion {
 
@@ -27,6 +26,16 @@ StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& nam
   if (name == "visibility") return StereoIntegrationMethod::kVisibility;
   if (name == "octomap") return StereoIntegrationMethod::kOctomap;
   throw std::invalid_argument("stereo method must be visibility or octomap, not '" + name + "'");
+}
+
+std::string toString(UnknownNeighbours policy) {
+  return policy == UnknownNeighbours::kPrior ? "prior" : "known_only";
+}
+
+UnknownNeighbours unknownNeighboursFromString(const std::string& name) {
+  if (name == "known_only") return UnknownNeighbours::kKnownOnly;
+  if (name == "prior") return UnknownNeighbours::kPrior;
+  throw std::invalid_argument("unknown_neighbours must be known_only or prior, not '" + name + "'");
 }
 
 namespace {
@@ -71,6 +80,10 @@ void VisibilityStereoConfig::validate() const {
         "VisibilityStereoConfig.visibility_min must be in (0, visibility_max]");
   }
   requireOpenUnit(unknown_occupancy, "unknown_occupancy");
+  if (unknown_neighbours != UnknownNeighbours::kKnownOnly &&
+      unknown_neighbours != UnknownNeighbours::kPrior) {
+    throw std::invalid_argument("VisibilityStereoConfig.unknown_neighbours is not a known policy");
+  }
   if (!(unknown_neighbour_occupancy >= 0 && unknown_neighbour_occupancy <= 1)) {
     throw std::invalid_argument(
         "VisibilityStereoConfig.unknown_neighbour_occupancy must be in [0, 1]");
@@ -127,32 +140,14 @@ double occupancyAfterInterpolatedMeasurement(double p_occupied, double p_inside,
 
 namespace {
 
-// Voxel keys relative to the frame's origin voxel, 21 bits per axis: rays
-// longer than 2^20 voxels are skipped, so every key of a frame is distinct.
-constexpr int kKeyBits = 21;
-constexpr int kMaxOffset = 1 << (kKeyBits - 1);
+// Voxel keys of a frame are packed relative to the frame's origin voxel (packKey's exact
+// range, |offset| < 2^20 voxels): rays longer than that are skipped, so every key of a frame is
+// distinct however far the sensor is from the map's origin.
+constexpr int kMaxOffset = kMaxKeyCoordinate3D;
 
 std::uint64_t voxelKey(const VoxelIndex& index, const VoxelIndex& origin) {
-  constexpr std::uint64_t kMask = (std::uint64_t{1} << kKeyBits) - 1;
-  auto field = [](int offset) { return static_cast<std::uint64_t>(offset + kMaxOffset) & kMask; };
-  return field(index.x() - origin.x()) | (field(index.y() - origin.y()) << kKeyBits) |
-         (field(index.z() - origin.z()) << (2 * kKeyBits));
+  return packKey(VoxelIndex(index - origin));
 }
-
-// Blocks as VoxelUpdateSet packs them (21 bits per axis cover VoxelMap's block
-// range).
-std::uint64_t blockKey(const BlockIndex& block) {
-  constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
-  auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & kMask; };
-  return field(block.x()) | (field(block.y()) << 21) | (field(block.z()) << 42);
-}
-
-struct KeyHash {
-  std::size_t operator()(std::uint64_t key) const {
-    const std::uint64_t mixed = key * 0x9E3779B97F4A7C15ull;
-    return static_cast<std::size_t>(mixed ^ (mixed >> 29));
-  }
-};
 
 // The frame's updates, one entry per voxel, reduced on insertion. Entries live
 // in a vector so that the previous-ray cache can keep their positions (a
@@ -180,7 +175,7 @@ class FrameUpdates {
   std::vector<StereoVoxelUpdate>& entries() { return entries_; }
 
  private:
-  tsl::robin_map<std::uint64_t, std::uint32_t, KeyHash> slots_;
+  SpatialKeyMap<std::uint32_t> slots_;
   std::vector<StereoVoxelUpdate> entries_;
 };
 
@@ -189,20 +184,20 @@ class FrameUpdates {
 // written during ray casting.
 class MapSnapshot {
  public:
-  MapSnapshot(const VoxelMap& map, float unknown_log_odds)
-      : map_(map), unknown_log_odds_(unknown_log_odds) {}
+  explicit MapSnapshot(const VoxelMap& map) : map_(map) {}
 
+  // The voxel's log-odds, or NaN when it was never observed.
   float logOdds(const VoxelIndex& index) {
-    const BlockIndex block = VoxelMap::blockOf(index);
-    const VoxelBlock* copy = find(block);
-    if (copy == nullptr) return unknown_log_odds_;
+    constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
+    const VoxelBlock* copy = find(VoxelMap::blockOf(index));
+    if (copy == nullptr) return kUnknown;
     const float value = copy->log_odds[VoxelMap::linearIndexInBlock(index)];
-    return VoxelBlock::isKnown(value) ? value : unknown_log_odds_;
+    return VoxelBlock::isKnown(value) ? value : kUnknown;
   }
 
  private:
   const VoxelBlock* find(const BlockIndex& block) {
-    const std::uint64_t key = blockKey(block);
+    const std::uint64_t key = packKey(block);
     if (last_valid_ && key == last_key_) return last_;
     auto it = blocks_.find(key);
     if (it == blocks_.end()) {
@@ -217,28 +212,42 @@ class MapSnapshot {
   }
 
   const VoxelMap& map_;
-  float unknown_log_odds_;
-  tsl::robin_map<std::uint64_t, std::unique_ptr<VoxelBlock>, KeyHash> blocks_;
+  SpatialKeyMap<std::unique_ptr<VoxelBlock>> blocks_;
   bool last_valid_ = false;
   std::uint64_t last_key_ = 0;
   const VoxelBlock* last_ = nullptr;
 };
 
+// How Eq. 1 reads a never-observed neighbour (the paper's OctoMap has no node there; see
+// UnknownNeighbours in the header).
+struct NeighbourReading {
+  bool ignore_unknown;     // kKnownOnly: left out of the minimum
+  float unknown_log_odds;  // kPrior: logit(unknown_neighbour_occupancy)
+};
+
 // Eq. 1: P(C_v) = min P(O) over the (up to three) neighbours behind the faces
 // of v that face the sensor. A face is visible when the sensor lies beyond its
 // plane: along an axis where the sensor shares v's slab, no face is visible and
-// that neighbour is left out (the sensor's own voxel has none: P(C) = 0). min
-// P(O) = sigmoid(min log-odds), one exp instead of three.
-double localOcclusion(const VoxelIndex& voxel, const VoxelIndex& origin, MapSnapshot* snapshot) {
+// that neighbour is left out (the sensor's own voxel has none: P(C) = 0). With
+// no neighbour left, nothing occludes v. min P(O) = sigmoid(min log-odds), one
+// exp instead of three.
+double localOcclusion(const VoxelIndex& voxel, const VoxelIndex& origin,
+                      const NeighbourReading& reading, MapSnapshot* snapshot) {
   float min_log_odds = std::numeric_limits<float>::infinity();
+  bool any = false;
   for (int axis = 0; axis < 3; ++axis) {
     if (voxel[axis] == origin[axis]) continue;
     VoxelIndex neighbour = voxel;
     neighbour[axis] += voxel[axis] > origin[axis] ? -1 : 1;
-    min_log_odds = std::min(min_log_odds, snapshot->logOdds(neighbour));
+    float value = snapshot->logOdds(neighbour);
+    if (std::isnan(value)) {
+      if (reading.ignore_unknown) continue;
+      value = reading.unknown_log_odds;
+    }
+    min_log_odds = std::min(min_log_odds, value);
+    any = true;
   }
-  if (min_log_odds == std::numeric_limits<float>::infinity()) return 0.0;
-  return probabilityFromLogOdds(min_log_odds);
+  return any ? probabilityFromLogOdds(min_log_odds) : 0.0;
 }
 
 // Sec. III-D: the voxels of the previous ray, by position on the ray, with
@@ -263,6 +272,7 @@ struct FrameContext {
   Eigen::Vector3d origin;
   VoxelIndex origin_voxel;
   double resolution;
+  NeighbourReading neighbours;
 };
 
 class RayCaster {
@@ -272,7 +282,12 @@ class RayCaster {
 
   void cast(const Eigen::Vector3d& point, double range_sigma) {
     current_.clear();
-    if (frame_.config.method == StereoIntegrationMethod::kOctomap) {
+    const Eigen::Vector3d offset = point - frame_.origin;
+    const double range = offset.norm();
+    const double max_range = frame_.config.max_range;
+    if (max_range >= 0 && range > max_range) {
+      castClipped(frame_.origin + offset * (max_range / range), range, range_sigma);
+    } else if (frame_.config.method == StereoIntegrationMethod::kOctomap) {
       castOctomap(point);
     } else {
       castVisibility(point, range_sigma);
@@ -291,9 +306,10 @@ class RayCaster {
       current_.push_back(previous_[j]);
     } else {
       const std::uint32_t entry = updates_->findOrInsert(index, frame_.origin_voxel);
-      const float occlusion =
-          need_occlusion ? static_cast<float>(localOcclusion(index, frame_.origin_voxel, snapshot_))
-                         : 0.0f;
+      const float occlusion = need_occlusion
+                                  ? static_cast<float>(localOcclusion(index, frame_.origin_voxel,
+                                                                      frame_.neighbours, snapshot_))
+                                  : 0.0f;
       current_.push_back({index, entry, occlusion});
     }
     return current_.back();
@@ -308,6 +324,41 @@ class RayCaster {
       updates_->reduce(lookUp(ray.current(), j, false).entry, at_end ? 1.0f : 0.0f, 1.0f);
       if (at_end) return;
       ray.stepTowardsEnd();
+    }
+  }
+
+  // P(I_v) of Sec. III-C: the voxel reduced to its centre, at distance s along the ray from the
+  // sensor, against a point at distance range with standard deviation range_sigma.
+  double insideProbability(const VoxelIndex& index, const Eigen::Vector3d& direction, double range,
+                           double range_sigma) const {
+    const Eigen::Vector3d center = (index.cast<double>().array() + 0.5) * frame_.resolution;
+    const double s = (center - frame_.origin).dot(direction);
+    if (range_sigma > 0) return frame_.phi((s - range) / range_sigma);
+    return s >= range ? 1.0 : 0.0;
+  }
+
+  // A point beyond max_range, as OctoMap's insertPointCloud treats it: the ray up to max_range
+  // (the voxel holding the cut left out) is updated as a miss and nothing as a hit. In the
+  // visibility mode the voxels keep Eq. 3's visibility and Eq. 8's P(I_v) from the measured
+  // range (about 0 unless the point lies within a few sigma of the cut); no full hit.
+  void castClipped(const Eigen::Vector3d& cut, double range, double range_sigma) {
+    const bool octomap = frame_.config.method == StereoIntegrationMethod::kOctomap;
+    const Eigen::Vector3d direction = (cut - frame_.origin).normalized();
+    RayTraversal ray(frame_.origin, cut, frame_.resolution);
+    double visibility = 1.0;
+    for (std::size_t j = 0; ray.beforeEnd(); ++j, ray.stepTowardsEnd()) {
+      const CachedVoxel& voxel = lookUp(ray.current(), j, !octomap);
+      if (octomap) {
+        updates_->reduce(voxel.entry, 0.0f, 1.0f);
+        continue;
+      }
+      visibility = nextVisibility(visibility, voxel.occlusion, frame_.config);  // Eq. 3
+      if (visibility < frame_.config.visibility_min) {
+        ++counters_.rays_invisible;
+        return;
+      }
+      const double p_inside = insideProbability(voxel.index, direction, range, range_sigma);
+      updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
     }
   }
 
@@ -330,12 +381,7 @@ class RayCaster {
         ++counters_.rays_invisible;
         return;
       }
-      // P(I_v): the voxel reduced to its centre, at distance s along the ray
-      // (Sec. III-C).
-      const Eigen::Vector3d center = (voxel.index.cast<double>().array() + 0.5) * f.resolution;
-      const double s = (center - f.origin).dot(direction);
-      double p_inside =
-          range_sigma > 0 ? f.phi((s - range) / range_sigma) : (s >= range ? 1.0 : 0.0);
+      double p_inside = insideProbability(voxel.index, direction, range, range_sigma);
       const bool stop = p_inside >= f.config.inside_stop_probability;
       if (stop) p_inside = 1.0;  // the one further voxel with a full hit (Sec. III-C)
       updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
@@ -353,11 +399,10 @@ class RayCaster {
 };
 
 bool isUsable(const Eigen::Vector3d& point, const Eigen::Vector3d& origin, double resolution,
-              double max_range, bool needs_direction) {
+              bool needs_direction) {
   if (!point.allFinite()) return false;
   const double range = (point - origin).norm();
   if (needs_direction && !(range > 0)) return false;  // the walk past the point needs a direction
-  if (max_range >= 0 && range > max_range) return false;
   // Keys hold 2^20 voxels each way; the walk may continue a few sigma past the
   // point.
   const double limit = 0.5 * kMaxOffset * resolution;
@@ -389,9 +434,11 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     return stats;
   }
   const double resolution = map.resolution();
-  const FrameContext frame{config_, phi_, sensor_origin, map.indexOf(sensor_origin), resolution};
   // logit(0) = -inf and logit(1) = +inf order correctly in Eq. 1's minimum.
-  const float unknown_log_odds = logit(config_.unknown_neighbour_occupancy);
+  const NeighbourReading neighbours{config_.unknown_neighbours == UnknownNeighbours::kKnownOnly,
+                                    logit(config_.unknown_neighbour_occupancy)};
+  const FrameContext frame{config_,    phi_,      sensor_origin, map.indexOf(sensor_origin),
+                           resolution, neighbours};
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
   const int count = static_cast<int>(points_in_map.size());
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
@@ -399,7 +446,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   std::size_t skipped = 0, visits = 0, hits = 0, invisible = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : skipped, visits, hits, invisible)
   {
-    MapSnapshot snapshot(map, unknown_log_odds);
+    MapSnapshot snapshot(map);
     RayCaster caster(frame, &snapshot, &per_thread[omp_get_thread_num()]);
     // Chunks of neighbouring pixels keep the previous-ray cache useful on every
     // thread.
@@ -407,7 +454,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     for (int i = 0; i < count; ++i) {
       const Eigen::Vector3d point = points_in_map[i].cast<double>();
       const double sigma = range_sigmas[i];
-      if (!isUsable(point, sensor_origin, resolution, config_.max_range, visibility_mode) ||
+      if (!isUsable(point, sensor_origin, resolution, visibility_mode) ||
           !(std::isfinite(sigma) && sigma >= 0)) {
         ++skipped;
         continue;
@@ -436,11 +483,11 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
 void VisibilityStereoIntegrator::apply(const std::vector<StereoVoxelUpdate>& updates,
                                        VoxelMap* map) const {
   // Group the updates by block so that each block is written by one thread.
-  tsl::robin_map<std::uint64_t, std::vector<std::uint32_t>, KeyHash> by_block;
+  SpatialKeyMap<std::vector<std::uint32_t>> by_block;
   std::vector<BlockIndex> blocks;
   for (std::uint32_t i = 0; i < updates.size(); ++i) {
     const BlockIndex block = VoxelMap::blockOf(updates[i].index);
-    auto [it, inserted] = by_block.try_emplace(blockKey(block));
+    auto [it, inserted] = by_block.try_emplace(packKey(block));
     if (inserted) blocks.push_back(block);
     it.value().push_back(i);
   }
@@ -450,7 +497,7 @@ void VisibilityStereoIntegrator::apply(const std::vector<StereoVoxelUpdate>& upd
   const float hit = map->model().hitLogOdds();
   const float miss = map->model().missLogOdds();
   map->updateBlocks(blocks, [&](const BlockIndex& block_index, VoxelBlock& block) {
-    for (std::uint32_t i : by_block.find(blockKey(block_index))->second) {
+    for (std::uint32_t i : by_block.find(packKey(block_index))->second) {
       const StereoVoxelUpdate& update = updates[i];
       const int linear = VoxelMap::linearIndexInBlock(update.index);
       if (octomap) {

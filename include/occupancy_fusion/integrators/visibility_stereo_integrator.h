@@ -27,6 +27,16 @@ enum class StereoIntegrationMethod {
 std::string toString(StereoIntegrationMethod method);
 StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& name);
 
+// How Eq. 1 reads a neighbour that was never observed. The paper's map is an OctoMap, which
+// holds no node for unknown space, and the paper does not say; see docs/disparity_method.md
+// for the measurements behind the default.
+enum class UnknownNeighbours {
+  kPrior,      // an unknown neighbour counts with P(O) = unknown_neighbour_occupancy
+  kKnownOnly,  // the minimum of Eq. 1 over the known neighbours only; none known: P(C) = 0
+};
+std::string toString(UnknownNeighbours policy);
+UnknownNeighbours unknownNeighboursFromString(const std::string& name);  // "known_only" | "prior"
+
 struct VisibilityStereoConfig {
   StereoIntegrationMethod method = StereoIntegrationMethod::kVisibility;
 
@@ -45,14 +55,23 @@ struct VisibilityStereoConfig {
   double visibility_max = 0.7;
   // P(O) of a never-observed voxel as the prior of Eq. 4-6.
   double unknown_occupancy = 0.5;
-  // P(O) of a never-observed neighbour in Eq. 1. At the prior 0.5 unknown space is partly
-  // occluding (each step through it multiplies the visibility by 1 - 0.8 * 0.5 = 0.6, below
-  // q_max), so a new view is mapped a few voxels deeper with every frame: the paper's Fig. 5a.
+  // Eq. 1 and unknown space. kPrior at 0.5 (the default): unknown space is partly occluding
+  // (each step through it multiplies the visibility by 1 - 0.8 * 0.5 = 0.6, below q_max), so a
+  // new view is mapped a few voxels deeper with every frame (the gradual growth of Fig. 5a), and
+  // Eq. 8's walk past a point into the unobserved space behind a surface ends within a few
+  // voxels. Unknown space made non-occluding (kKnownOnly, or kPrior below 0.375, where the
+  // factor reaches q_max) maps the corridor scene completely but with 4-17x OctoMap's
+  // false-occupied voxels: behind a one-voxel-thick wall Eq. 1's minimum finds an unknown
+  // neighbour, so nothing stops the walk past the point (measurements in
+  // docs/disparity_method.md).
+  UnknownNeighbours unknown_neighbours = UnknownNeighbours::kPrior;
+  // P(O) of a never-observed neighbour in Eq. 1 under kPrior.
   double unknown_neighbour_occupancy = 0.5;
   // Eq. 8: the ray stops at the first voxel whose P(I_v) reaches this value
   // ("close to 1"); that voxel gets a full hit, P(O_v | H).
   double inside_stop_probability = 0.99;
-  // m; points farther from the sensor are dropped. Negative: unlimited.
+  // m, as OctoMap's maxrange: a point farther from the sensor clears its ray up to this
+  // distance (the voxel holding the cut is left out) and adds no hit. Negative: unlimited.
   double max_range = -1.0;
   // The disparity image's conversion to points (sigma_d of Eq. 7, input
   // resolution).
@@ -104,7 +123,7 @@ struct StereoVoxelUpdate {
 
 struct StereoIntegrationStats {
   std::size_t points = 0;          // points given (after the disparity conversion)
-  std::size_t skipped_points = 0;  // non-finite, beyond max_range or outside the map's range
+  std::size_t skipped_points = 0;  // non-finite, or outside the key range of the map
   std::size_t rays = 0;            // rays cast
   std::size_t rays_invisible = 0;  // rays stopped early because P(V) fell below q_min
   std::size_t voxel_visits = 0;    // voxels walked over all rays

@@ -35,8 +35,8 @@ sim::PinholeCamera corridorCamera() {
 // Poses of the left optical frame walking down the corridor at 1.2 m height.
 std::vector<Eigen::Isometry3d> corridorPoses() {
   std::vector<Eigen::Isometry3d> poses;
-  for (const Eigen::Isometry3d& body :
-       sim::straightLinePath({0.5, 0.0, 1.2}, {2.9, 0.0, 1.2}, kFrames, 0.0, 0.0)) {
+  for (const Eigen::Isometry3d& body : sim::straightLinePath(
+           {0.5, 0.0, 1.2}, {0.5 + 0.03 * kFrames, 0.0, 1.2}, kFrames, 0.0, 0.0)) {
     poses.push_back(body * sim::opticalFrameInBody());
   }
   return poses;
@@ -164,12 +164,15 @@ TEST(CorridorArtifactsTest, VisibilityMapsFewerFalseOccupiedVoxelsThanOctomap) {
       kFrames, surface.size(), visibility.false_occupied, visibility.occupied, visibility.coverage,
       visibility.ms_per_frame, visibility.cache_hit_rate, octomap.false_occupied, octomap.occupied,
       octomap.coverage, octomap.ms_per_frame, octomap.cache_hit_rate);
-  // Measured (Release): visibility 1/13 of OctoMap's false-occupied voxels at 65 % of
-  // its coverage; the goal is <= 1/5 at >= 90 %. The coverage gap is the method's gradual
-  // mapping of unknown space (Fig. 5a): surfaces far ahead are not reached yet.
+  // Measured (Release): 167 false-occupied voxels against OctoMap's 2240 (1/13.4; the goal is
+  // <= 1/5), at 0.646 of its coverage (the goal of >= 0.9 is not reached). The coverage gap is
+  // the method's gradual mapping of unknown space (Fig. 5a, unknown neighbours at P(O) = 0.5 in
+  // Eq. 1): surfaces far ahead are not reached yet after 80 frames (0.80 after 300). Making
+  // unknown space non-occluding reaches full coverage but 4-8x OctoMap's false-occupied voxels
+  // (docs/disparity_method.md).
   EXPECT_LE(5 * visibility.false_occupied, octomap.false_occupied);
   EXPECT_GT(octomap.coverage, 0.95);
-  EXPECT_GE(visibility.coverage, 0.55 * octomap.coverage);
+  EXPECT_GE(visibility.coverage, 0.6 * octomap.coverage);
 }
 
 }  // namespace

@@ -296,11 +296,14 @@ TEST(VisibilityStereoIntegratorTest, CacheDoesNotChangeTheResult) {
   EXPECT_LE(sorted_stats.cache_hits, sorted_stats.voxel_visits);
 }
 
-TEST(VisibilityStereoIntegratorTest, OctomapModeEqualsPointCloudIntegrator) {
+void expectOctomapModeEqualsPointCloudIntegrator(double max_range) {
   VisibilityStereoConfig config;
   config.method = StereoIntegrationMethod::kOctomap;
+  config.max_range = max_range;
   const VisibilityStereoIntegrator stereo(config);
-  const PointCloudIntegrator cloud;
+  PointCloudIntegratorConfig cloud_config;
+  cloud_config.max_range = max_range;
+  const PointCloudIntegrator cloud(cloud_config);
   VoxelMap ours(mapConfig());
   VoxelMap reference(mapConfig());
   for (unsigned frame = 0; frame < 3; ++frame) {
@@ -318,6 +321,71 @@ TEST(VisibilityStereoIntegratorTest, OctomapModeEqualsPointCloudIntegrator) {
     ++compared;
   });
   EXPECT_GT(compared, 1000u);
+}
+
+TEST(VisibilityStereoIntegratorTest, OctomapModeEqualsPointCloudIntegrator) {
+  expectOctomapModeEqualsPointCloudIntegrator(-1.0);
+}
+
+TEST(VisibilityStereoIntegratorTest, OctomapModeMaxRangeEqualsPointCloudIntegrator) {
+  // The points lie 1-3.4 m away: about half are beyond 2 m and clear their rays up to 2 m only.
+  expectOctomapModeEqualsPointCloudIntegrator(2.0);
+}
+
+TEST(VisibilityStereoIntegratorTest, MaxRangeClearsUpToTheRangeWithoutAHit) {
+  // The point at 1.47 m from the origin, max_range 1.0 m: the cut lies at x = 1.05, in voxel 10,
+  // which is left out as in OctoMap. Voxels 0..9 get visible misses (P(I) = 0: the point is
+  // thousands of sigma away), nothing from voxel 10 on changes, and there is no hit.
+  VisibilityStereoConfig config;
+  config.max_range = 1.0;
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(false, &map);
+  const StereoIntegrationStats stats =
+      VisibilityStereoIntegrator(config).integrate({kPoint}, {kTinySigma}, kOrigin, &map);
+  EXPECT_EQ(stats.skipped_points, 0u);
+  EXPECT_EQ(stats.updated_voxels, 10u);
+  for (int k = 0; k <= 9; ++k) EXPECT_NEAR(probabilityAt(map, k), 0.135 / 0.534, 1e-6) << k;
+  for (int k = 10; k <= 17; ++k) EXPECT_NEAR(probabilityAt(map, k), 0.3, 1e-6) << k;
+
+  // Within max_range the point is integrated as without one.
+  config.max_range = 1.6;
+  VoxelMap within(mapConfig());
+  fillFreeCorridor(false, &within);
+  integrateOnePoint(config, &within);
+  EXPECT_NEAR(probabilityAt(within, 15), 0.165 / 0.466, 1e-6);
+}
+
+TEST(VisibilityStereoIntegratorTest, MaxRangeKeepsVisibility) {
+  // Behind the known wall at voxels 10, 11 the clipped ray (cut at x = 1.35, voxel 13) stops
+  // as the full ray does: voxel 12 is not updated.
+  VisibilityStereoConfig config;
+  config.max_range = 1.3;
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(true, &map);
+  const StereoIntegrationStats stats =
+      VisibilityStereoIntegrator(config).integrate({kPoint}, {kTinySigma}, kOrigin, &map);
+  EXPECT_EQ(stats.rays_invisible, 1u);
+  EXPECT_EQ(stats.updated_voxels, 12u);
+  EXPECT_NEAR(probabilityAt(map, 12), 0.3, 1e-6);
+}
+
+TEST(VisibilityStereoIntegratorTest, KnownOnlyNeighboursMapUnknownSpaceAtOnce) {
+  // With unknown neighbours left out of Eq. 1 the first frame into an unknown map reaches the
+  // point at full visibility: misses from the prior 0.5 (0.45 / 1.02) up to voxel 14, the full
+  // hit in voxel 15 (0.55 / 0.98).
+  VisibilityStereoConfig config;
+  config.unknown_neighbours = UnknownNeighbours::kKnownOnly;
+  VoxelMap map(mapConfig());
+  const StereoIntegrationStats stats =
+      VisibilityStereoIntegrator(config).integrate({kPoint}, {kTinySigma}, kOrigin, &map);
+  EXPECT_EQ(stats.rays_invisible, 0u);
+  EXPECT_EQ(stats.updated_voxels, 16u);
+  for (int k = 0; k <= 14; ++k) EXPECT_NEAR(probabilityAt(map, k), 0.45 / 1.02, 1e-6) << k;
+  EXPECT_NEAR(probabilityAt(map, 15), 0.55 / 0.98, 1e-6);
+  EXPECT_EQ(unknownNeighboursFromString("known_only"), UnknownNeighbours::kKnownOnly);
+  EXPECT_EQ(unknownNeighboursFromString("prior"), UnknownNeighbours::kPrior);
+  EXPECT_EQ(toString(UnknownNeighbours::kPrior), "prior");
+  EXPECT_THROW(unknownNeighboursFromString("zero"), std::invalid_argument);
 }
 
 TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointForm) {
