@@ -33,6 +33,7 @@ int runDepth(const CommandLine& args);    // benchmark_depth.cpp
 int runLaser(const CommandLine& args);    // benchmark_laser.cpp
 int runLaserMap(const CommandLine& args);  // benchmark_laser_map.cpp
 int runDisparity(const CommandLine& args);  // benchmark_disparity.cpp
+int runDisparityArtifacts(const CommandLine& args);  // benchmark_disparity_artifacts.cpp
 
 namespace {
 
@@ -257,6 +258,15 @@ const std::vector<Workload>& workloads() {
         "jitter_deg", "sigma", "block_size", "threads", "clock", "rtabmap", "picture",
         "picture_scene", "picture_resolution"},
        runDisparity},
+      {"disparity-artifacts",
+       "[--part all|artifacts|fig5a] [--frames N] [--resolution R] [--fig5a_updates U]\n"
+       "      [--unknown_neighbours prior|known_only] [--unknown_neighbour_occupancy P] [--images DIR]\n"
+       "      Schauwecker & Zell Sec. IV-A on the simulated corridor with correlated disparity\n"
+       "      errors: false-occupied voxels and surface coverage of the visibility method, the\n"
+       "      OctoMap mode and OcTree::insertPointCloud on the same points; Fig. 5a's growth",
+       {"part", "frames", "resolution", "fig5a_updates", "unknown_neighbours",
+        "unknown_neighbour_occupancy", "images"},
+       runDisparityArtifacts},
   };
   return table;
 }
