@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -15,6 +17,7 @@
 #include <ros/time.h>
 
 #include "occupancy_fusion/tools/command_line.h"
+#include "occupancy_fusion/tools/file_readers.h"
 #include "occupancy_fusion/tools/map_outputs.h"
 #include "occupancy_fusion/tools/recording_mapper.h"
 #include "occupancy_fusion/tools/rosbag_reader.h"
@@ -24,24 +27,47 @@ namespace occupancy_fusion {
 namespace {
 
 const char* const kUsage =
-    R"(usage: offline_mapper --config FILE.yaml --bag IN.bag --output-dir DIR [options]
+    R"(usage: offline_mapper --config FILE.yaml --output-dir DIR INPUT... [options]
 
-Maps the point clouds of a rosbag (no ROS master needed) into one 3D voxel map and writes
-DIR/NAME.bt, .ot (OctoMap), .pcd (every known voxel with its occupancy probability), .pgm + .yaml
-(map_server files of the fused 2D view over occupancy_min_z..occupancy_max_z), .npy (per-column
-log-odds behind the 2D view) and .png (a picture of the 2D view).
-Poses come from the bag's /tf and /tf_static; a cloud whose transform to frame_id is not
-available is skipped and counted.
+Maps recorded sensor data (no ROS master needed) into one map: a 3D voxel map (point clouds,
+depth images, disparity images) and a 2D laser layer (laser scans), as the mapper nodelets do
+online. Writes DIR/NAME.bt, .ot (OctoMap), .pcd (every known voxel with its occupancy
+probability), .pgm + .yaml (map_server files of the fused 2D view: the voxels within
+occupancy_min_z..occupancy_max_z and the laser layer), .npy (per-column log-odds behind the 2D
+view) and .png (a picture of the 2D view).
 
+Inputs (at least one; any mix, each repeatable):
+  --bag FILE           rosbag; several bags are merged in time order and share their tf.
+                       Poses come from /tf and /tf_static; a frame whose transform to frame_id
+                       is not available is skipped and counted.
+  --depth-folder DIR   depth images in the 7-Scenes layout (camera-intrinsics.txt,
+                       [frames/]frame-NNNNNN.depth.png in mm, frame-NNNNNN.pose.txt
+                       camera-to-world), world frame = map frame
+  --middlebury-folder DIR  disparity maps in the Middlebury layout (calib.txt, disp0*.pfm,
+                       optional pose0*.txt camera-to-world; without one the camera is at the
+                       origin), or a folder of such scene folders
+  --carmen FILE        CARMEN log (.gz accepted): FLASER lines with their corrected poses
+Topics of the bags (default, when none is given: every topic of a supported type; an Image
+topic counts when its first message is 16UC1, mono16 or 32FC1):
+  --cloud-topic TOPIC      sensor_msgs/PointCloud2
+  --depth-topic TOPIC      sensor_msgs/Image (16UC1 mm or 32FC1 m) with .../camera_info beside it
+  --disparity-topic TOPIC  stereo_msgs/DisparityImage with .../camera_info or .../left/camera_info
+  --scan-topic TOPIC       sensor_msgs/LaserScan
+Parameters and output:
   --config FILE        YAML parameters, as loaded by rosparam into a mapper nodelet; repeat
                        to merge several files as successive rosparam loads (later ones win),
-                       e.g. point_cloud_mapper.yaml, then map_server.yaml for the 2D band
+                       e.g. point_cloud_mapper.yaml, depth_mapper.yaml, disparity_mapper.yaml,
+                       laser_mapper.yaml, then map_server.yaml for the 2D band. Depth keys live
+                       under depth/, stereo keys under stereo/, laser keys under laser/.
   --namespace NS       take the parameters from section NS of each file (e.g. a node name)
   --set KEY=VALUE      override one parameter, e.g. --set sensor_model/max_range=4 (repeatable)
-  --bag FILE           input rosbag
-  --cloud-topic TOPIC  sensor_msgs/PointCloud2 topic to map (repeatable; default: all of them)
   --output-dir DIR     where the map files go (created if needed)
   --name NAME          base name of the map files (default: map)
+  --carmen-max-scans N read at most N scans of each CARMEN log (default: all)
+  --single-scan N      also write the grid of laser scan N alone (0-based, in reading order) in
+                       its sensor's frame: NAME_scan.npy (log-ratios), .pgm + .yaml, .png; a
+                       60 m x 30 m grid at the map's resolution, the sensor at the middle of
+                       the lower long edge facing into it (Yguel et al.'s Table I setup)
   --quiet              no progress lines
   --help               this text
 Exit status: 0 done, 2 bad arguments, parameters or input files, 1 failure while mapping
@@ -52,12 +78,26 @@ struct Options {
   std::vector<std::string> config_paths;
   std::string config_namespace;
   std::vector<std::string> overrides;
-  std::string bag_path;
-  std::vector<std::string> cloud_topics;
+  std::vector<std::string> bag_paths;
+  RosbagTopics topics;
+  std::vector<std::string> depth_folders;
+  std::vector<std::string> middlebury_folders;
+  std::vector<std::string> carmen_logs;
+  int carmen_max_scans = 0;
+  int single_scan = -1;  // none
   std::string output_dir;
   std::string name;
   bool quiet = false;
 };
+
+void requireExisting(const std::vector<std::string>& paths, bool folders) {
+  for (const std::string& path : paths) {
+    const bool exists =
+        folders ? std::filesystem::is_directory(path) : std::filesystem::is_regular_file(path);
+    if (!exists)
+      throw UsageError(std::string(folders ? "no such folder: " : "no such file: ") + path);
+  }
+}
 
 Options parseOptions(const CommandLine& line) {
   Options options;
@@ -65,19 +105,38 @@ Options parseOptions(const CommandLine& line) {
   options.config_paths = line.values("config");
   options.config_namespace = line.value("namespace");
   options.overrides = line.values("set");
-  options.bag_path = line.required("bag");
-  options.cloud_topics = line.values("cloud-topic");
+  options.bag_paths = line.values("bag");
+  options.topics.clouds = line.values("cloud-topic");
+  options.topics.depth_images = line.values("depth-topic");
+  options.topics.disparity_images = line.values("disparity-topic");
+  options.topics.scans = line.values("scan-topic");
+  options.depth_folders = line.values("depth-folder");
+  options.middlebury_folders = line.values("middlebury-folder");
+  options.carmen_logs = line.values("carmen");
+  options.carmen_max_scans = line.intValue("carmen-max-scans", 0);
+  options.single_scan = line.intValue("single-scan", -1);
   options.output_dir = line.required("output-dir");
   options.name = line.value("name", "map");
   options.quiet = line.has("quiet");
   if (options.name.empty() || options.name.find('/') != std::string::npos) {
     throw UsageError("--name must be a plain file name, got '" + options.name + "'");
   }
-  std::vector<std::string> inputs = options.config_paths;
-  inputs.push_back(options.bag_path);
-  for (const std::string& path : inputs) {
-    if (!std::filesystem::is_regular_file(path)) throw UsageError("no such file: " + path);
+  if (options.bag_paths.empty() && options.depth_folders.empty() &&
+      options.middlebury_folders.empty() && options.carmen_logs.empty()) {
+    throw UsageError("missing input: give --bag, --depth-folder, --middlebury-folder or --carmen");
   }
+  if (options.bag_paths.empty() && !options.topics.empty()) {
+    throw UsageError("topic options need a --bag");
+  }
+  if (options.carmen_max_scans < 0) throw UsageError("--carmen-max-scans must be >= 0");
+  if (line.has("single-scan") && options.single_scan < 0) {
+    throw UsageError("--single-scan must be >= 0");
+  }
+  requireExisting(options.config_paths, false);
+  requireExisting(options.bag_paths, false);
+  requireExisting(options.carmen_logs, false);
+  requireExisting(options.depth_folders, true);
+  requireExisting(options.middlebury_folders, true);
   return options;
 }
 
@@ -110,28 +169,47 @@ double peakResidentMebibytes() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
 }
 
-void printSummary(const InputReader& reader, const RecordingMapper& mapper,
-                  const MapOutputs& outputs, double total_seconds) {
-  const RecordingStatistics& stats = mapper.statistics();
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(1);
-  text << "offline_mapper: summary\n  input: " << reader.description() << "\n  frames:";
-  if (stats.frames_by_kind.empty()) text << " 0";
-  for (const auto& [kind, count] : stats.frames_by_kind) text << " " << count << " " << kind;
-  text << " integrated, " << stats.framesSkipped() << " skipped\n";
+const char* measurementName(const std::string& kind) {
+  if (kind == "point_cloud") return "points";
+  if (kind == "laser") return "beams";
+  return "pixels";
+}
+
+// One line per sensor kind (frames, skips with their reasons, time per frame).
+void printKinds(const RecordingStatistics& stats, std::ostream& text) {
+  for (const auto& [kind, kind_stats] : stats.by_kind) {
+    text << "  " << kind << ": " << kind_stats.frames << " integrated, " << kind_stats.skipped
+         << " skipped, " << kind_stats.millisecondsPerFrame() << " ms per frame, "
+         << kind_stats.measurements << " " << measurementName(kind) << "\n";
+  }
   for (const auto& [reason, count] : stats.skipped_by_reason) {
     text << "    skipped " << count << ": " << reason
          << " (first: " << stats.first_skip_detail.at(reason) << ")\n";
   }
+}
+
+void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
+                  const RecordingMapper& mapper, const MapOutputs& outputs, double total_seconds) {
+  const RecordingStatistics& stats = mapper.statistics();
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(1);
+  text << "offline_mapper: summary\n";
+  for (const auto& reader : readers) text << "  input: " << reader->description() << "\n";
+  text << "  frames:";
+  if (stats.frames_by_kind.empty()) text << " 0";
+  for (const auto& [kind, count] : stats.frames_by_kind) text << " " << count << " " << kind;
+  text << " integrated, " << stats.framesSkipped() << " skipped\n";
+  printKinds(stats, text);
   const std::size_t frames = stats.framesIntegrated();
   text << "  time: " << total_seconds << " s in all, "
        << (frames > 0 ? 1000.0 * stats.integration_seconds / frames : 0.0)
-       << " ms per integrated frame (" << stats.points << " points)\n";
+       << " ms per integrated frame\n";
   std::size_t occupied = 0;
   mapper.map().forEachOccupiedVoxel([&](const VoxelIndex&, float) { ++occupied; });
   text << "  map: " << mapper.map().knownVoxelCount() << " voxels known, " << occupied
-       << " occupied, resolution " << std::setprecision(3) << mapper.map().resolution() << " m, "
-       << std::setprecision(1) << mapper.map().memoryBytes() / (1024.0 * 1024.0)
+       << " occupied, " << mapper.laserLayer().knownCellCount() << " laser cells known, resolution "
+       << std::setprecision(3) << mapper.map().resolution() << " m, " << std::setprecision(1)
+       << (mapper.map().memoryBytes() + mapper.laserLayer().memoryBytes()) / (1024.0 * 1024.0)
        << " MiB map memory, " << peakResidentMebibytes() << " MiB peak resident\n";
   if (outputs.grid_width == 0) {
     text << "  2D view: none, nothing was mapped (no .pgm, .yaml, .npy, .png)\n";
@@ -152,17 +230,64 @@ void printSummary(const InputReader& reader, const RecordingMapper& mapper,
   std::cout << text.str() << "\n";
 }
 
+// Forwards every frame to the mapper and keeps a copy of laser scan number `wanted`.
+class ScanPicker : public FrameConsumer {
+ public:
+  ScanPicker(FrameConsumer* next, int wanted) : next_(next), wanted_(wanted) {}
+
+  void onPointCloud(const PointCloudFrame& frame) override { next_->onPointCloud(frame); }
+  void onDepthImage(const DepthImageFrame& frame) override { next_->onDepthImage(frame); }
+  void onDisparityImage(const DisparityFrame& frame) override { next_->onDisparityImage(frame); }
+  void onLaserScan(const LaserScanFrame& frame) override {
+    if (scans_seen_++ == wanted_) picked_ = frame;
+    next_->onLaserScan(frame);
+  }
+  void onUnreadable(const FrameHeader& header, const std::string& why) override {
+    next_->onUnreadable(header, why);
+  }
+
+  int scansSeen() const { return scans_seen_; }
+  const std::optional<LaserScanFrame>& picked() const { return picked_; }
+
+ private:
+  FrameConsumer* next_;
+  int wanted_;
+  int scans_seen_ = 0;
+  std::optional<LaserScanFrame> picked_;
+};
+
 // Everything that can fail because of the user's input, before any mapping: UsageError.
 struct Setup {
   Options options;
   std::unique_ptr<YamlParameterSource> parameters;
   RecordingMapperConfig config;
-  std::unique_ptr<RosbagReader> reader;
+  std::vector<std::unique_ptr<InputReader>> readers;
 };
+
+std::vector<std::unique_ptr<InputReader>> openReaders(const Options& options) {
+  std::vector<std::unique_ptr<InputReader>> readers;
+  if (!options.bag_paths.empty()) {
+    readers.push_back(std::make_unique<RosbagReader>(options.bag_paths, options.topics));
+  }
+  for (const std::string& folder : options.depth_folders) {
+    readers.push_back(std::make_unique<SevenScenesReader>(folder));
+  }
+  for (const std::string& folder : options.middlebury_folders) {
+    readers.push_back(std::make_unique<MiddleburyReader>(folder));
+  }
+  CarmenReadConfig carmen;
+  carmen.max_scans = static_cast<std::size_t>(options.carmen_max_scans);
+  for (const std::string& log : options.carmen_logs) {
+    readers.push_back(std::make_unique<CarmenReader>(log, carmen));
+  }
+  return readers;
+}
 
 Setup prepare(int argc, char** argv) {
   const CommandLine line(argc, argv,
-                         {"config", "namespace", "set", "bag", "cloud-topic", "output-dir", "name"},
+                         {"config", "namespace", "set", "bag", "cloud-topic", "depth-topic",
+                          "disparity-topic", "scan-topic", "depth-folder", "middlebury-folder",
+                          "carmen", "carmen-max-scans", "single-scan", "output-dir", "name"},
                          {"quiet", "help"});
   Setup setup;
   setup.options = parseOptions(line);
@@ -182,26 +307,58 @@ Setup prepare(int argc, char** argv) {
     throw UsageError("cannot create --output-dir " + setup.options.output_dir);
   }
   try {
-    setup.reader =
-        std::make_unique<RosbagReader>(setup.options.bag_path, setup.options.cloud_topics);
+    setup.readers = openReaders(setup.options);
   } catch (const std::invalid_argument& error) {
     throw UsageError(error.what());
   }
   return setup;
 }
 
+// Writes NAME_scan.* for --single-scan; false (after saying why) when there is no such scan.
+bool writeSingleScan(const Setup& setup, const ScanPicker& picker) {
+  if (setup.options.single_scan < 0) return true;
+  if (!picker.picked()) {
+    std::cerr << "offline_mapper: error: --single-scan " << setup.options.single_scan
+              << ": the inputs hold " << picker.scansSeen() << " laser scans\n";
+    return false;
+  }
+  SingleScanGridConfig grid;
+  grid.resolution = setup.config.map.resolution;
+  const LogOddsRaster raster = singleScanGrid(picker.picked()->scan, setup.config.laser, grid);
+  const std::string prefix =
+      (std::filesystem::path(setup.options.output_dir) / (setup.options.name + "_scan")).string();
+  const std::vector<std::string> files =
+      writeSingleScanOutputs(raster, setup.config.map.model.thresholdLogOdds(), prefix);
+  std::cout << "offline_mapper: scan " << setup.options.single_scan << " ("
+            << picker.picked()->header.source << ", " << methodName(setup.config.laser.method)
+            << ") in its sensor frame: " << raster.width << " x " << raster.height
+            << " cells, wrote";
+  for (const std::string& file : files) std::cout << " " << file;
+  std::cout << "\n";
+  return true;
+}
+
 int run(int argc, char** argv) {
   Setup setup = prepare(argc, argv);
-  ProgressPrinter progress(setup.reader->frameCount(), setup.options.quiet);
-  if (!setup.options.quiet) std::cerr << "offline_mapper: " << setup.reader->description() << "\n";
-  RecordingMapper mapper(setup.config, &setup.reader->poses(), &std::cerr);
-  setup.reader->read(&mapper, [&](std::size_t done) { progress(done); });
+  std::size_t total_frames = 0;
+  for (const auto& reader : setup.readers) total_frames += reader->frameCount();
+  ProgressPrinter progress(total_frames, setup.options.quiet);
+  RecordingMapper mapper(setup.config, nullptr, &std::cerr);
+  ScanPicker picker(&mapper, setup.options.single_scan);
+  std::size_t frames_before = 0;
+  for (const auto& reader : setup.readers) {
+    if (!setup.options.quiet) std::cerr << "offline_mapper: " << reader->description() << "\n";
+    mapper.setPoseSource(&reader->poses());
+    reader->read(&picker, [&](std::size_t done) { progress(frames_before + done); });
+    frames_before += reader->frameCount();
+  }
   const MapOutputs outputs = writeMapOutputs(mapper, setup.options.output_dir, setup.options.name);
-  printSummary(*setup.reader, mapper, outputs, progress.elapsedSeconds());
+  printSummary(setup.readers, mapper, outputs, progress.elapsedSeconds());
   for (const std::string& key : setup.parameters->unreadOverrides()) {
     std::cerr << "offline_mapper: warning: --set " << key
               << " was not read by anything (misspelt?)\n";
   }
+  if (!writeSingleScan(setup, picker)) return kUsageExitCode;
   if (mapper.statistics().framesIntegrated() == 0) {
     std::cerr << "offline_mapper: failed: no frame could be integrated (see the skip reasons)\n";
     return 1;

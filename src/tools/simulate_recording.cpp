@@ -1,7 +1,9 @@
-// simulate_recording: writes a rosbag of a simulated robot with a depth camera moving through
-// one of the simulator's scenes, for offline_mapper, rosbag play and the demo. See kUsage.
+// simulate_recording: writes a rosbag of a simulated robot with its sensors (point-cloud camera,
+// depth camera, stereo camera, two laser scanners) moving through one of the simulator's scenes,
+// for offline_mapper, rosbag play and the demo. See kUsage.
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,15 +18,23 @@ namespace {
 
 const char* const kUsage = R"(usage: simulate_recording --output OUT.bag [options]
 
-Writes a deterministic rosbag of a robot moving through a simulated scene with a depth camera:
-sensor_msgs/PointCloud2 on /cloud_in (frame camera_optical_frame), the robot's pose on /tf
-(map -> odom -> base_link) and the camera mount on /tf_static (base_link -> camera_link ->
-camera_optical_frame).
+Writes a deterministic rosbag of a robot moving through a simulated scene with its sensors, the
+robot's pose on /tf (map -> odom -> base_link) and the sensor mounts on /tf_static. Sensors:
+  cloud      sensor_msgs/PointCloud2 on /cloud_in (frame camera_optical_frame)
+  depth      sensor_msgs/Image 16UC1 (mm) on /camera/depth/image with /camera/depth/camera_info
+             (frame depth_camera_optical_frame)
+  disparity  stereo_msgs/DisparityImage on /stereo/disparity with /stereo/left/camera_info
+             (frame stereo_left_optical_frame; 0.12 m baseline, 0.1 px white noise)
+  scan       sensor_msgs/LaserScan from two scanners: /scan_front (frame laser_front) and
+             /scan_rear (frame laser_rear, facing backward, mounted upside down)
 
   --output FILE   the bag to write (overwritten)
   --scene NAME    room (default), corridor, box or spheres
   --frames N      number of frames (default 60)
   --rate HZ       frames per second (default 5)
+  --sensors LIST  comma-separated sensor kinds (default: cloud,depth,disparity,scan)
+  --disparity-patches P  chance in [0, 1] of a patch of wrong disparity in each 24 x 24 px cell,
+                  persisting over 10 frames, as a real matcher's correlated errors (default 0)
   --help          this text
 Exit status: 0 done, 2 bad arguments, 1 failure while writing.
 )";
@@ -44,12 +54,35 @@ SimulatedRecordingConfig parseConfig(const CommandLine& line) {
   return config;
 }
 
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
+}
+
+std::vector<std::unique_ptr<SimulatedSensor>> parseSensors(const CommandLine& line) {
+  const std::vector<std::string> kinds =
+      splitList(line.value("sensors", "cloud,depth,disparity,scan"));
+  if (kinds.empty()) throw UsageError("--sensors: give at least one sensor kind");
+  SimulatedSensorOptions options;
+  options.disparity_patch_probability = line.doubleValue("disparity-patches", 0.0);
+  try {
+    return makeSimulatedSensors(kinds, options);
+  } catch (const std::invalid_argument& error) {
+    throw UsageError(std::string("--sensors / --disparity-patches: ") + error.what());
+  }
+}
+
 int run(int argc, char** argv) {
-  const CommandLine line(argc, argv, {"output", "scene", "frames", "rate"}, {"help"});
+  const CommandLine line(
+      argc, argv, {"output", "scene", "frames", "rate", "sensors", "disparity-patches"}, {"help"});
   const SimulatedRecordingConfig config = parseConfig(line);
   const std::string output = line.required("output");
-  std::vector<std::unique_ptr<SimulatedSensor>> sensors;
-  sensors.push_back(std::make_unique<PointCloudCameraSensor>(PointCloudCameraConfig()));
+  const std::vector<std::unique_ptr<SimulatedSensor>> sensors = parseSensors(line);
   try {
     writeSimulatedRecording(config, sensors, output);
   } catch (const rosbag::BagException& error) {

@@ -1,14 +1,18 @@
 // Maps a recording offline: the FrameConsumer that places each frame with the recording's poses
-// and integrates it into one VoxelMap (and, for laser scans, a GridLayer2D), as the mapper
-// nodelets do online.
+// and integrates it into one VoxelMap (point clouds, depth images, disparity images) and one
+// GridLayer2D (laser scans), as the mapper nodelets do online.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <iosfwd>
 #include <map>
 #include <string>
 
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
@@ -21,20 +25,39 @@ struct RecordingMapperConfig {
   std::string frame_id = "map";  // fixed frame the map is built in (REP-105)
   VoxelMapConfig map;
   PointCloudIntegratorConfig point_cloud;
-  FusedGridConfig fused_grid;  // height band of the 2D view
+  PyramidDepthConfig depth;          // depth images (Pirker et al.)
+  VisibilityStereoConfig stereo;     // disparity images (Schauwecker & Zell)
+  PolarLaserIntegratorConfig laser;  // laser scans into the 2D layer (Yguel et al.)
+  double laser_max_tilt = 0.1;       // rad, largest tilt of a scan plane from the map's x-y plane
+  FusedGridConfig fused_grid;        // height band of the 2D view
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
-// frame_id, then the parameters of readVoxelMapConfig, readPointCloudIntegratorConfig and
-// readFusedGridConfig: the same keys the point-cloud mapper nodelet and map server read.
+// frame_id, then the parameters of readVoxelMapConfig, readPointCloudIntegratorConfig,
+// readPyramidDepthConfig (depth/...), readVisibilityStereoConfig (stereo/...),
+// readPolarLaserIntegratorConfig under laser/ (and laser/max_tilt) and readFusedGridConfig: the
+// same keys the mapper nodelets and map server read, so their YAML files can be merged.
 RecordingMapperConfig readRecordingMapperConfig(const ParameterSource& source);
+
+// What happened to the frames of one sensor kind.
+struct SensorKindStatistics {
+  std::size_t frames = 0;            // integrated
+  std::size_t skipped = 0;           // not integrated (no pose, unreadable, ...)
+  std::size_t measurements = 0;      // points, pixels or beams of the integrated frames
+  double integration_seconds = 0.0;  // pose lookup + integration of the integrated frames
+
+  double millisecondsPerFrame() const {
+    return frames > 0 ? 1e3 * integration_seconds / frames : 0;
+  }
+};
 
 struct RecordingStatistics {
   std::map<std::string, std::size_t> frames_by_kind;     // integrated, e.g. "point_cloud"
   std::map<std::string, std::size_t> skipped_by_reason;  // not integrated, by short reason
   std::map<std::string, std::string> first_skip_detail;  // reason -> first full message
-  std::size_t points = 0;                                // points integrated
+  std::map<std::string, SensorKindStatistics> by_kind;   // "point_cloud", "depth", ...
+  std::size_t points = 0;                                // point-cloud points integrated
   double integration_seconds = 0.0;                      // transform + integrate, all frames
 
   std::size_t framesIntegrated() const;
@@ -47,7 +70,13 @@ class RecordingMapper : public FrameConsumer {
   RecordingMapper(const RecordingMapperConfig& config, const PoseSource* poses,
                   std::ostream* warnings);
 
+  // Later frames take their poses from `poses` (when a run moves on to the next recording).
+  void setPoseSource(const PoseSource* poses) { poses_ = poses; }
+
   void onPointCloud(const PointCloudFrame& frame) override;
+  void onDepthImage(const DepthImageFrame& frame) override;
+  void onDisparityImage(const DisparityFrame& frame) override;
+  void onLaserScan(const LaserScanFrame& frame) override;
   void onUnreadable(const FrameHeader& header, const std::string& why) override;
 
   const RecordingMapperConfig& config() const { return config_; }
@@ -61,7 +90,10 @@ class RecordingMapper : public FrameConsumer {
  private:
   // The sensor-to-map transform, or nullopt after counting the frame as skipped.
   std::optional<Eigen::Isometry3d> poseOf(const FrameHeader& header);
-  void skip(const std::string& reason, const std::string& detail);
+  void skip(const FrameHeader& header, const std::string& reason, const std::string& detail);
+  // Counts an integrated frame of `kind` that started at `start`.
+  void countIntegrated(const std::string& kind, std::size_t measurements,
+                       std::chrono::steady_clock::time_point start);
 
   RecordingMapperConfig config_;
   const PoseSource* poses_;
@@ -69,6 +101,9 @@ class RecordingMapper : public FrameConsumer {
   VoxelMap map_;
   GridLayer2D laser_layer_;
   PointCloudIntegrator point_cloud_integrator_;
+  PyramidDepthIntegrator depth_integrator_;
+  VisibilityStereoIntegrator stereo_integrator_;
+  PolarLaserIntegrator laser_integrator_;
   RecordingStatistics statistics_;
 };
 

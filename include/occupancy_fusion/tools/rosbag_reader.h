@@ -1,11 +1,15 @@
 // Reads a rosbag without a ROS master: sensor messages in time order, poses from its tf.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <rosbag/bag.h>
+#include <rosbag/message_instance.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <tf2/buffer_core.h>
 
 #include "occupancy_fusion/tools/recording.h"
@@ -20,6 +24,10 @@ class TfPoseSource : public PoseSource {
   // Loads every tf2_msgs/TFMessage on tf_topic and static_tf_topic of an open bag.
   TfPoseSource(const rosbag::Bag& bag, const std::string& tf_topic = "/tf",
                const std::string& static_tf_topic = "/tf_static");
+  // The same for several bags recorded together: one buffer holds all their transforms.
+  explicit TfPoseSource(const std::vector<const rosbag::Bag*>& bags,
+                        const std::string& tf_topic = "/tf",
+                        const std::string& static_tf_topic = "/tf_static");
 
   std::optional<Eigen::Isometry3d> lookup(const std::string& target_frame,
                                           const std::string& sensor_frame, double stamp,
@@ -28,16 +36,42 @@ class TfPoseSource : public PoseSource {
   std::size_t transformCount() const { return transform_count_; }
 
  private:
+  void load(const rosbag::Bag& bag, const std::string& tf_topic,
+            const std::string& static_tf_topic);
+
   std::unique_ptr<tf2::BufferCore> buffer_;
   std::size_t transform_count_ = 0;
 };
 
-// sensor_msgs/PointCloud2 frames from a bag (later issues add images and scans).
+// The sensor topics of a bag to map, per kind.
+struct RosbagTopics {
+  std::vector<std::string> clouds;            // sensor_msgs/PointCloud2
+  std::vector<std::string> depth_images;      // sensor_msgs/Image, 16UC1 / mono16 mm or 32FC1 m
+  std::vector<std::string> disparity_images;  // stereo_msgs/DisparityImage
+  std::vector<std::string> scans;             // sensor_msgs/LaserScan
+
+  bool empty() const {
+    return clouds.empty() && depth_images.empty() && disparity_images.empty() && scans.empty();
+  }
+};
+
+// Sensor frames from one or more bags, merged in time order: PointCloud2, depth images with their
+// camera_info, DisparityImages with the left camera's camera_info, and LaserScans. Poses come from
+// the bags' tf. A message that cannot be decoded (wrong encoding, no camera_info) reaches the
+// consumer's onUnreadable and reading goes on.
+//
+// Camera infos: a depth image on .../NAME uses .../camera_info (image_transport's convention); a
+// disparity image on .../NAME uses .../camera_info, else .../left/camera_info (stereo_image_proc's
+// layout). The camera_info nearest in time to the image is used.
 class RosbagReader : public InputReader {
  public:
-  // Opens the bag; cloud_topics empty means every PointCloud2 topic in it. Throws
-  // std::invalid_argument when the file cannot be opened as a bag, a requested topic is not in
-  // it or is not a PointCloud2, or it holds no PointCloud2 at all.
+  // Opens the bags. With `topics` empty every topic of a supported type is mapped: every
+  // PointCloud2, DisparityImage and LaserScan topic, and every Image topic whose first message
+  // has a depth encoding. Otherwise exactly the topics given. Throws std::invalid_argument when
+  // a file cannot be opened as a bag, a requested topic is in none of them or has another type,
+  // or there is nothing to map.
+  RosbagReader(const std::vector<std::string>& paths, const RosbagTopics& topics);
+  // One bag, PointCloud2 topics only (every one when cloud_topics is empty).
   RosbagReader(const std::string& path, const std::vector<std::string>& cloud_topics);
   ~RosbagReader() override;
 
@@ -46,14 +80,23 @@ class RosbagReader : public InputReader {
   const PoseSource& poses() const override { return *poses_; }
   void read(FrameConsumer* consumer, const std::function<void(std::size_t)>& after_frame) override;
 
-  const std::vector<std::string>& cloudTopics() const { return cloud_topics_; }
+  const RosbagTopics& topics() const { return topics_; }
+  const std::vector<std::string>& cloudTopics() const { return topics_.clouds; }
 
  private:
-  std::string path_;
-  rosbag::Bag bag_;
-  std::vector<std::string> cloud_topics_;
+  void open(const std::vector<std::string>& paths, const RosbagTopics& topics, bool clouds_only);
+  // Camera infos of every topic some image may use, by topic, in time order.
+  void loadCameraInfos();
+  const sensor_msgs::CameraInfo* nearestCameraInfo(const std::vector<std::string>& candidates,
+                                                   double stamp, std::string* why) const;
+  void deliver(const rosbag::MessageInstance& message, FrameConsumer* consumer) const;
+
+  std::vector<std::string> paths_;
+  std::vector<std::unique_ptr<rosbag::Bag>> bags_;
+  RosbagTopics topics_;
   std::size_t frame_count_ = 0;
   std::unique_ptr<TfPoseSource> poses_;
+  std::map<std::string, std::vector<std::pair<double, sensor_msgs::CameraInfo>>> camera_infos_;
 };
 
 }  // namespace occupancy_fusion

@@ -13,7 +13,9 @@
 #include <rosbag/bag.h>
 
 #include "occupancy_fusion/sim/depth_camera.h"
+#include "occupancy_fusion/sim/laser_scanner.h"
 #include "occupancy_fusion/sim/scene.h"
+#include "occupancy_fusion/sim/stereo_camera.h"
 
 namespace occupancy_fusion {
 
@@ -23,9 +25,9 @@ struct SimulatedWorld {
   std::vector<Eigen::Isometry3d> T_map_base;  // robot (base_link) pose per frame
 };
 
-// Scene names: "room" (sim::makeRoomScene, the robot turns on a circle around the free centre,
-// facing outward), "corridor" (drives down the corridor), "box" and "spheres" (the depth paper's
-// scenes, the robot turning in place at the paper's camera position). Throws
+// Scene names: "room" (sim::makeRoomScene, the robot turns on a circle of 0.5 m around the free
+// centre, facing outward), "corridor" (drives down the corridor), "box" and "spheres" (the depth
+// paper's scenes, the robot turning in place at the paper's camera position). Throws
 // std::invalid_argument listing the names for an unknown one.
 SimulatedWorld makeSimulatedWorld(const std::string& scene_name, int frames);
 std::vector<std::string> simulatedSceneNames();
@@ -36,8 +38,9 @@ class SimulatedSensor {
   virtual ~SimulatedSensor() = default;
   // Its mount on the robot: static transforms from base_link down to the frame its data is in.
   virtual std::vector<geometry_msgs::TransformStamped> mountTransforms() const = 0;
-  // Renders the scene from the robot pose and writes the frame's messages stamped `stamp`.
-  virtual void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base,
+  // Renders the scene from the robot pose and writes frame number `frame`'s messages stamped
+  // `stamp` (the number drives noise that persists over frames).
+  virtual void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base, int frame,
                           const ros::Time& stamp, rosbag::Bag* bag) const = 0;
 };
 
@@ -61,12 +64,114 @@ class PointCloudCameraSensor : public SimulatedSensor {
  public:
   explicit PointCloudCameraSensor(const PointCloudCameraConfig& config);  // validates
   std::vector<geometry_msgs::TransformStamped> mountTransforms() const override;
-  void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base,
+  void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base, int frame,
                   const ros::Time& stamp, rosbag::Bag* bag) const override;
 
  private:
   PointCloudCameraConfig config_;
 };
+
+// A depth camera publishing what an RGB-D driver does: sensor_msgs/Image (16UC1 in mm, 0 = no
+// return, or 32FC1 in m, NaN = no return) with sensor_msgs/CameraInfo beside it.
+struct DepthImageCameraConfig {
+  std::string image_topic = "/camera/depth/image";
+  std::string info_topic = "/camera/depth/camera_info";
+  std::string link_frame = "depth_camera_link";
+  std::string optical_frame = "depth_camera_optical_frame";
+  sim::PinholeCamera camera{160, 120, 138.6, 138.6, 79.5, 59.5};
+  double max_range = 6.0;   // m
+  bool millimetres = true;  // 16UC1 (true) or 32FC1
+  // 0.9 m up, looking 0.5 rad to the left of the robot's heading, tilted down by 0.3 rad.
+  Eigen::Isometry3d T_base_link = Eigen::Translation3d(0.0, 0.1, 0.9) *
+                                  Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()) *
+                                  Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY());
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+class DepthImageCameraSensor : public SimulatedSensor {
+ public:
+  explicit DepthImageCameraSensor(const DepthImageCameraConfig& config);  // validates
+  std::vector<geometry_msgs::TransformStamped> mountTransforms() const override;
+  void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base, int frame,
+                  const ros::Time& stamp, rosbag::Bag* bag) const override;
+
+ private:
+  DepthImageCameraConfig config_;
+};
+
+// A stereo camera publishing what stereo_image_proc does: stereo_msgs/DisparityImage of the left
+// camera (invalid pixels below min_disparity) and the left sensor_msgs/CameraInfo, with the
+// simulator's matcher errors (white noise, optionally correlated patches that persist).
+struct DisparityCameraConfig {
+  std::string disparity_topic = "/stereo/disparity";
+  std::string info_topic = "/stereo/left/camera_info";
+  std::string link_frame = "stereo_link";
+  std::string optical_frame = "stereo_left_optical_frame";
+  sim::PinholeCamera camera{160, 120, 138.6, 138.6, 79.5, 59.5};
+  double baseline = 0.12;      // m
+  double max_range = 6.0;      // m
+  double min_disparity = 0.5;  // px, as published; smaller values mark invalid pixels
+  double max_disparity = 256.0;
+  sim::DisparityNoise noise = [] {
+    sim::DisparityNoise noise;
+    noise.sigma_px = 0.1;
+    return noise;
+  }();
+  // 1.1 m up, looking 0.5 rad to the right of the robot's heading, tilted down by 0.2 rad.
+  Eigen::Isometry3d T_base_link = Eigen::Translation3d(0.05, -0.1, 1.1) *
+                                  Eigen::AngleAxisd(-0.5, Eigen::Vector3d::UnitZ()) *
+                                  Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY());
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+class DisparityCameraSensor : public SimulatedSensor {
+ public:
+  explicit DisparityCameraSensor(const DisparityCameraConfig& config);  // validates
+  std::vector<geometry_msgs::TransformStamped> mountTransforms() const override;
+  void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base, int frame,
+                  const ros::Time& stamp, rosbag::Bag* bag) const override;
+
+ private:
+  DisparityCameraConfig config_;
+};
+
+// A 2D laser scanner publishing sensor_msgs/LaserScan (REP-117) in its own frame.
+struct LaserScannerConfig {
+  std::string topic = "/scan";
+  std::string frame = "laser";
+  sim::LaserScanner scanner;  // 361 beams over 180 degrees, 30 m
+  Eigen::Isometry3d T_base_laser = Eigen::Isometry3d(Eigen::Translation3d(0.25, 0.0, 0.3));
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+class LaserScannerSensor : public SimulatedSensor {
+ public:
+  explicit LaserScannerSensor(const LaserScannerConfig& config);  // validates
+  std::vector<geometry_msgs::TransformStamped> mountTransforms() const override;
+  void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base, int frame,
+                  const ros::Time& stamp, rosbag::Bag* bag) const override;
+
+ private:
+  LaserScannerConfig config_;
+};
+
+// The two scanners of the simulated robot: /scan_front (frame laser_front, 0.25 m ahead, 0.3 m
+// up, facing forward) and /scan_rear (frame laser_rear, 0.25 m behind, 0.35 m up, facing
+// backward and mounted upside down, so its beams sweep clockwise in the map).
+std::vector<LaserScannerConfig> twoLaserScanners();
+
+// Sensor kinds of simulate_recording's --sensors: "cloud", "depth", "disparity", "scan".
+std::vector<std::string> simulatedSensorKinds();
+struct SimulatedSensorOptions {
+  double disparity_patch_probability = 0.0;  // correlated disparity patches (0: none)
+};
+// The sensors of the given kinds (each name once at most; "scan" gives both scanners). Throws
+// std::invalid_argument naming an unknown kind.
+std::vector<std::unique_ptr<SimulatedSensor>> makeSimulatedSensors(
+    const std::vector<std::string>& kinds, const SimulatedSensorOptions& options = {});
 
 struct SimulatedRecordingConfig {
   std::string scene = "room";

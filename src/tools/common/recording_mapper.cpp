@@ -1,10 +1,14 @@
 #include "occupancy_fusion/tools/recording_mapper.h"
 
 #include <chrono>
+#include <cmath>
 #include <ostream>
 #include <stdexcept>
 
 #include "occupancy_fusion/params/config_readers.h"
+#include "occupancy_fusion/params/depth_config_reader.h"
+#include "occupancy_fusion/params/laser_config_reader.h"
+#include "occupancy_fusion/params/stereo_config_reader.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -31,6 +35,12 @@ void RecordingMapperConfig::validate() const {
   if (frame_id.empty()) throw std::invalid_argument("frame_id must not be empty");
   map.validate();
   point_cloud.validate();
+  depth.validate();
+  stereo.validate();
+  laser.validate();
+  if (!(laser_max_tilt >= 0.0 && laser_max_tilt < M_PI / 2)) {
+    throw std::invalid_argument("laser/max_tilt must be in [0, pi/2) rad");
+  }
   fused_grid.validate();
 }
 
@@ -39,6 +49,10 @@ RecordingMapperConfig readRecordingMapperConfig(const ParameterSource& source) {
   source.get("frame_id", &config.frame_id);
   config.map = readVoxelMapConfig(source);
   config.point_cloud = readPointCloudIntegratorConfig(source);
+  config.depth = readPyramidDepthConfig(source);
+  config.stereo = readVisibilityStereoConfig(source);
+  config.laser = readPolarLaserIntegratorConfig(source, "laser/");
+  source.get("laser/max_tilt", &config.laser_max_tilt);
   config.fused_grid = readFusedGridConfig(source);
   config.validate();
   return config;
@@ -63,7 +77,10 @@ RecordingMapper::RecordingMapper(const RecordingMapperConfig& config, const Pose
       warnings_(warnings),
       map_(config.map),
       laser_layer_(laserLayerConfig(config.map)),
-      point_cloud_integrator_(config.point_cloud) {
+      point_cloud_integrator_(config.point_cloud),
+      depth_integrator_(config.depth),
+      stereo_integrator_(config.stereo),
+      laser_integrator_(config.laser) {
   config_.validate();
 }
 
@@ -73,14 +90,80 @@ void RecordingMapper::onPointCloud(const PointCloudFrame& frame) {
   if (!map_T_sensor) return;
   point_cloud_integrator_.integrate(transformed(frame.points, *map_T_sensor),
                                     map_T_sensor->translation(), &map_);
-  ++statistics_.frames_by_kind["point_cloud"];
   statistics_.points += frame.points.size();
-  statistics_.integration_seconds +=
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  countIntegrated("point_cloud", frame.points.size(), start);
+}
+
+void RecordingMapper::onDepthImage(const DepthImageFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    frame.camera.validate();
+    frame.view().validateAgainst(frame.camera);
+  } catch (const std::invalid_argument& error) {
+    skip(frame.header, "bad depth image on " + frame.header.source, error.what());
+    return;
+  }
+  const std::optional<Eigen::Isometry3d> map_T_camera = poseOf(frame.header);
+  if (!map_T_camera) return;
+  depth_integrator_.integrate(frame.view(), frame.camera, *map_T_camera, &map_);
+  countIntegrated("depth", frame.depth.size(), start);
+}
+
+void RecordingMapper::onDisparityImage(const DisparityFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    frame.camera.validate();
+    frame.view().validate();
+    if (frame.disparity.size() != static_cast<std::size_t>(frame.width) * frame.height) {
+      throw std::invalid_argument("disparity data does not match its size");
+    }
+  } catch (const std::invalid_argument& error) {
+    skip(frame.header, "bad disparity image on " + frame.header.source, error.what());
+    return;
+  }
+  const std::optional<Eigen::Isometry3d> map_T_camera = poseOf(frame.header);
+  if (!map_T_camera) return;
+  stereo_integrator_.integrate(frame.view(), frame.camera, *map_T_camera, &map_);
+  countIntegrated("disparity", frame.disparity.size(), start);
+}
+
+void RecordingMapper::onLaserScan(const LaserScanFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    frame.scan.validate();
+  } catch (const std::invalid_argument& error) {
+    skip(frame.header, "bad laser scan on " + frame.header.source, error.what());
+    return;
+  }
+  const std::optional<Eigen::Isometry3d> map_T_sensor = poseOf(frame.header);
+  if (!map_T_sensor) return;
+  bool upside_down = false;
+  Pose2D sensor;
+  try {
+    sensor = planarPose(*map_T_sensor, config_.laser_max_tilt, &upside_down);
+  } catch (const std::invalid_argument& error) {
+    skip(frame.header, "scan plane of '" + frame.header.frame_id + "' tilted", error.what());
+    return;
+  }
+  laser_integrator_.integrateIntoLayer(upside_down ? mirrorScan(frame.scan) : frame.scan, sensor,
+                                       &laser_layer_);
+  countIntegrated("laser", frame.scan.ranges.size(), start);
 }
 
 void RecordingMapper::onUnreadable(const FrameHeader& header, const std::string& why) {
-  skip("unreadable message on " + header.source, why);
+  skip(header, "unreadable message on " + header.source, why);
+}
+
+void RecordingMapper::countIntegrated(const std::string& kind, std::size_t measurements,
+                                      std::chrono::steady_clock::time_point start) {
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ++statistics_.frames_by_kind[kind];
+  SensorKindStatistics& stats = statistics_.by_kind[kind];
+  ++stats.frames;
+  stats.measurements += measurements;
+  stats.integration_seconds += seconds;
+  statistics_.integration_seconds += seconds;
 }
 
 OccupancyRaster RecordingMapper::fusedGrid() const {
@@ -88,17 +171,21 @@ OccupancyRaster RecordingMapper::fusedGrid() const {
 }
 
 std::optional<Eigen::Isometry3d> RecordingMapper::poseOf(const FrameHeader& header) {
+  if (header.T_map_sensor) return header.T_map_sensor;
   std::string why;
   std::optional<Eigen::Isometry3d> pose =
-      poses_->lookup(config_.frame_id, header.frame_id, header.stamp, &why);
+      poses_ == nullptr ? std::nullopt
+                        : poses_->lookup(config_.frame_id, header.frame_id, header.stamp, &why);
   if (!pose) {
-    skip("no transform from '" + header.frame_id + "' to '" + config_.frame_id + "'",
+    skip(header, "no transform from '" + header.frame_id + "' to '" + config_.frame_id + "'",
          "at t = " + std::to_string(header.stamp) + " s: " + why);
   }
   return pose;
 }
 
-void RecordingMapper::skip(const std::string& reason, const std::string& detail) {
+void RecordingMapper::skip(const FrameHeader& header, const std::string& reason,
+                           const std::string& detail) {
+  ++statistics_.by_kind[header.kind.empty() ? "unknown" : header.kind].skipped;
   if (statistics_.skipped_by_reason[reason]++ == 0) {
     statistics_.first_skip_detail[reason] = detail;
     if (warnings_ != nullptr) {

@@ -1,8 +1,11 @@
 #include "occupancy_fusion/tools/simulated_recording.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
+#include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include "occupancy_fusion/sim/scenes.h"
@@ -20,13 +23,15 @@ Eigen::Isometry3d robotPose(double x, double y, double yaw) {
 // Fraction of the way along a path for frame k of n (0 for a single frame).
 double progressOf(int k, int frames) { return frames > 1 ? double(k) / (frames - 1) : 0.0; }
 
-// One full turn on a circle of radius 1 m around the room's free centre, facing outward, so
-// the camera sees every wall and object once.
+// One full turn on a circle of radius 0.5 m around the room's free centre, facing outward, so
+// the sensors see every wall and object once. The table's nearest corner is 0.89 m from the
+// centre: on this circle the robot and its scanners (0.25 m from its centre) stay clear of it.
 std::vector<Eigen::Isometry3d> roomPath(int frames) {
+  constexpr double kRadius = 0.5;  // m
   std::vector<Eigen::Isometry3d> poses;
   for (int k = 0; k < frames; ++k) {
     const double angle = 2.0 * M_PI * k / frames;
-    poses.push_back(robotPose(std::cos(angle), std::sin(angle), angle));
+    poses.push_back(robotPose(kRadius * std::cos(angle), kRadius * std::sin(angle), angle));
   }
   return poses;
 }
@@ -47,6 +52,31 @@ std::vector<Eigen::Isometry3d> corridorPath(int frames) {
   for (int k = 0; k < frames; ++k)
     poses.push_back(robotPose(1.0 + 16.0 * progressOf(k, frames), 0.0, 0.0));
   return poses;
+}
+
+CameraIntrinsics intrinsicsOf(const sim::PinholeCamera& camera) {
+  CameraIntrinsics intrinsics;
+  intrinsics.width = camera.width;
+  intrinsics.height = camera.height;
+  intrinsics.fx = camera.fx;
+  intrinsics.fy = camera.fy;
+  intrinsics.cx = camera.cx;
+  intrinsics.cy = camera.cy;
+  return intrinsics;
+}
+
+// base_link -> link (the mount) -> optical frame (REP-103 rotation).
+std::vector<geometry_msgs::TransformStamped> cameraMount(const Eigen::Isometry3d& T_base_link,
+                                                         const std::string& link_frame,
+                                                         const std::string& optical_frame) {
+  return {transformMessage(T_base_link, "base_link", link_frame, ros::Time()),
+          transformMessage(sim::opticalFrameInBody(), link_frame, optical_frame, ros::Time())};
+}
+
+void checkFrames(const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    if (name.empty()) throw std::invalid_argument("topic and frame names must not be empty");
+  }
 }
 
 ros::Time stampOf(const SimulatedRecordingConfig& config, int frame) {
@@ -93,8 +123,8 @@ std::vector<geometry_msgs::TransformStamped> PointCloudCameraSensor::mountTransf
 }
 
 void PointCloudCameraSensor::writeFrame(const sim::Scene& scene,
-                                        const Eigen::Isometry3d& T_map_base, const ros::Time& stamp,
-                                        rosbag::Bag* bag) const {
+                                        const Eigen::Isometry3d& T_map_base, int /*frame*/,
+                                        const ros::Time& stamp, rosbag::Bag* bag) const {
   const Eigen::Isometry3d T_map_optical =
       T_map_base * config_.T_base_link * sim::opticalFrameInBody();
   const std::vector<Eigen::Vector3d> points =
@@ -103,6 +133,160 @@ void PointCloudCameraSensor::writeFrame(const sim::Scene& scene,
   points_f.reserve(points.size());
   for (const Eigen::Vector3d& point : points) points_f.push_back(point.cast<float>());
   bag->write(config_.topic, stamp, cloudFromPoints(points_f, config_.optical_frame, stamp));
+}
+
+void DepthImageCameraConfig::validate() const {
+  checkFrames({image_topic, info_topic, link_frame, optical_frame});
+  camera.validate();
+  if (!(max_range > 0.0)) throw std::invalid_argument("max_range must be > 0");
+  if (millimetres && max_range > 65.535) {
+    throw std::invalid_argument("max_range must be <= 65.535 m for 16-bit millimetres");
+  }
+}
+
+DepthImageCameraSensor::DepthImageCameraSensor(const DepthImageCameraConfig& config)
+    : config_(config) {
+  config_.validate();
+}
+
+std::vector<geometry_msgs::TransformStamped> DepthImageCameraSensor::mountTransforms() const {
+  return cameraMount(config_.T_base_link, config_.link_frame, config_.optical_frame);
+}
+
+void DepthImageCameraSensor::writeFrame(const sim::Scene& scene,
+                                        const Eigen::Isometry3d& T_map_base, int /*frame*/,
+                                        const ros::Time& stamp, rosbag::Bag* bag) const {
+  const Eigen::Isometry3d T_map_optical =
+      T_map_base * config_.T_base_link * sim::opticalFrameInBody();
+  const sim::DepthImage depth =
+      sim::renderDepth(scene, config_.camera, T_map_optical, config_.max_range);
+  bag->write(config_.info_topic, stamp,
+             cameraInfoMessage(intrinsicsOf(config_.camera), config_.optical_frame, stamp));
+  bag->write(config_.image_topic, stamp,
+             depthImageMessage(depth.depth, depth.width, depth.height, config_.millimetres,
+                               config_.optical_frame, stamp));
+}
+
+void DisparityCameraConfig::validate() const {
+  checkFrames({disparity_topic, info_topic, link_frame, optical_frame});
+  camera.validate();
+  noise.validate();
+  if (!(baseline > 0.0)) throw std::invalid_argument("baseline must be > 0");
+  if (!(max_range > 0.0)) throw std::invalid_argument("max_range must be > 0");
+  if (!(min_disparity > 0.0) || !(max_disparity > min_disparity)) {
+    throw std::invalid_argument("min_disparity must be > 0 and below max_disparity");
+  }
+}
+
+DisparityCameraSensor::DisparityCameraSensor(const DisparityCameraConfig& config)
+    : config_(config) {
+  config_.validate();
+}
+
+std::vector<geometry_msgs::TransformStamped> DisparityCameraSensor::mountTransforms() const {
+  return cameraMount(config_.T_base_link, config_.link_frame, config_.optical_frame);
+}
+
+void DisparityCameraSensor::writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base,
+                                       int frame, const ros::Time& stamp, rosbag::Bag* bag) const {
+  const Eigen::Isometry3d T_map_optical =
+      T_map_base * config_.T_base_link * sim::opticalFrameInBody();
+  const sim::DisparityImage image =
+      sim::renderDisparity(scene, config_.camera, config_.baseline, T_map_optical,
+                           config_.max_range, config_.noise, frame);
+  StereoCamera camera;
+  camera.fx = config_.camera.fx;
+  camera.fy = config_.camera.fy;
+  camera.cx = config_.camera.cx;
+  camera.cy = config_.camera.cy;
+  camera.baseline = config_.baseline;
+  // A matcher reports nothing outside its search range: those pixels become invalid.
+  std::vector<float> disparity = image.disparity;
+  for (float& value : disparity) {
+    if (!(value >= config_.min_disparity && value <= config_.max_disparity)) {
+      value = std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  bag->write(config_.info_topic, stamp,
+             cameraInfoMessage(intrinsicsOf(config_.camera), config_.optical_frame, stamp));
+  bag->write(config_.disparity_topic, stamp,
+             disparityMessage(disparity, image.width, image.height, camera, config_.min_disparity,
+                              config_.max_disparity, config_.optical_frame, stamp));
+}
+
+void LaserScannerConfig::validate() const {
+  checkFrames({topic, frame});
+  scanner.validate();
+}
+
+LaserScannerSensor::LaserScannerSensor(const LaserScannerConfig& config) : config_(config) {
+  config_.validate();
+}
+
+std::vector<geometry_msgs::TransformStamped> LaserScannerSensor::mountTransforms() const {
+  return {transformMessage(config_.T_base_laser, "base_link", config_.frame, ros::Time())};
+}
+
+void LaserScannerSensor::writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base,
+                                    int frame, const ros::Time& stamp, rosbag::Bag* bag) const {
+  const sim::LaserScan scan =
+      sim::renderScan(scene, config_.scanner, T_map_base * config_.T_base_laser, frame);
+  sensor_msgs::LaserScan message;
+  message.header.frame_id = config_.frame;
+  message.header.stamp = stamp;
+  message.angle_min = static_cast<float>(scan.angle_min);
+  message.angle_max = static_cast<float>(scan.angle_max);
+  message.angle_increment = static_cast<float>(scan.angle_increment);
+  message.range_min = static_cast<float>(scan.range_min);
+  message.range_max = static_cast<float>(scan.range_max);
+  message.ranges = scan.ranges;
+  bag->write(config_.topic, stamp, message);
+}
+
+std::vector<LaserScannerConfig> twoLaserScanners() {
+  LaserScannerConfig front;
+  front.topic = "/scan_front";
+  front.frame = "laser_front";
+  front.T_base_laser = Eigen::Translation3d(0.25, 0.0, 0.3);
+  LaserScannerConfig rear;
+  rear.topic = "/scan_rear";
+  rear.frame = "laser_rear";
+  rear.scanner.seed = 2;
+  rear.T_base_laser = Eigen::Translation3d(-0.25, 0.0, 0.35) *
+                      Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()) *
+                      Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
+  return {front, rear};
+}
+
+std::vector<std::string> simulatedSensorKinds() { return {"cloud", "depth", "disparity", "scan"}; }
+
+std::vector<std::unique_ptr<SimulatedSensor>> makeSimulatedSensors(
+    const std::vector<std::string>& kinds, const SimulatedSensorOptions& options) {
+  std::vector<std::unique_ptr<SimulatedSensor>> sensors;
+  std::vector<std::string> seen;
+  for (const std::string& kind : kinds) {
+    if (std::find(seen.begin(), seen.end(), kind) != seen.end()) {
+      throw std::invalid_argument("sensor kind '" + kind + "' given twice");
+    }
+    seen.push_back(kind);
+    if (kind == "cloud") {
+      sensors.push_back(std::make_unique<PointCloudCameraSensor>(PointCloudCameraConfig()));
+    } else if (kind == "depth") {
+      sensors.push_back(std::make_unique<DepthImageCameraSensor>(DepthImageCameraConfig()));
+    } else if (kind == "disparity") {
+      DisparityCameraConfig config;
+      config.noise.patch_probability = options.disparity_patch_probability;
+      sensors.push_back(std::make_unique<DisparityCameraSensor>(config));
+    } else if (kind == "scan") {
+      for (const LaserScannerConfig& config : twoLaserScanners()) {
+        sensors.push_back(std::make_unique<LaserScannerSensor>(config));
+      }
+    } else {
+      throw std::invalid_argument("unknown sensor kind '" + kind +
+                                  "' (known: cloud, depth, disparity, scan)");
+    }
+  }
+  return sensors;
 }
 
 void SimulatedRecordingConfig::validate() const {
@@ -140,7 +324,7 @@ int writeSimulatedRecording(const SimulatedRecordingConfig& config,
         transformMessage(config.T_map_odom.inverse() * T_map_base, "odom", "base_link", stamp));
     bag.write("/tf", stamp, poses);
     for (const std::unique_ptr<SimulatedSensor>& sensor : sensors) {
-      sensor->writeFrame(world.scene, T_map_base, stamp, &bag);
+      sensor->writeFrame(world.scene, T_map_base, frame, stamp, &bag);
     }
   }
   bag.close();

@@ -89,8 +89,14 @@ PointCloudCameraConfig SimulatedBagTest::camera_;
 
 struct CollectingConsumer : FrameConsumer {
   void onPointCloud(const PointCloudFrame& frame) override { clouds.push_back(frame); }
+  void onDepthImage(const DepthImageFrame& frame) override { depth.push_back(frame); }
+  void onDisparityImage(const DisparityFrame& frame) override { disparity.push_back(frame); }
+  void onLaserScan(const LaserScanFrame& frame) override { scans.push_back(frame); }
   void onUnreadable(const FrameHeader&, const std::string& why) override { errors.push_back(why); }
   std::vector<PointCloudFrame> clouds;
+  std::vector<DepthImageFrame> depth;
+  std::vector<DisparityFrame> disparity;
+  std::vector<LaserScanFrame> scans;
   std::vector<std::string> errors;
 };
 
