@@ -324,7 +324,10 @@ PolarMipmap::PolarMipmap(const PolarField& field, double cell_size) {
   const double range_footprint = std::log2(std::max(1.0, cell_size / field.range_resolution));
   first_range_level_ =
       std::min(static_cast<int>(std::floor(range_footprint)), levelCount(field.cells) - 1);
-  range_levels_ = std::min(2, levelCount(field.cells) - first_range_level_);
+  // When the footprint is a whole power of two (cells as long as the range cells, the usual
+  // case) the blend gives the coarser level weight 0: it is not built.
+  const bool whole = range_footprint == std::floor(range_footprint);
+  range_levels_ = std::min(whole ? 1 : 2, levelCount(field.cells) - first_range_level_);
 
   // Only the range cells up to the farthest observed one (plus two texels of the coarsest level
   // kept, all zero, so that lookups clamped at the end still read zeros) enter the pyramid.
@@ -389,10 +392,11 @@ void PolarMipmap::lookup(int angle_level, int range_level, double u, double v, f
   const Level& l = level(angle_level, range_level);
   // Texel j of level n spans base [j 2^n, (j + 1) 2^n): its centre is at (j +
   // 0.5) 2^n.
-  const double tu = std::ldexp(u, -std::clamp(angle_level, 0, angle_levels_ - 1)) - 0.5;
-  const double tv = std::ldexp(v, -std::clamp(range_level, first_range_level_,
-                                              first_range_level_ + range_levels_ - 1)) -
-                    0.5;
+  // 2^-n as a product (exact for these small n), cheaper than ldexp per lookup.
+  const int a = std::clamp(angle_level, 0, angle_levels_ - 1);
+  const int r = std::clamp(range_level, first_range_level_, first_range_level_ + range_levels_ - 1);
+  const double tu = u * (1.0 / static_cast<double>(1 << a)) - 0.5;
+  const double tv = v * (1.0 / static_cast<double>(1 << r)) - 0.5;
   const int b0 = static_cast<int>(std::floor(tu));
   const int k0 = static_cast<int>(std::floor(tv));
   const float fu = static_cast<float>(tu - b0);
