@@ -249,14 +249,14 @@ const std::vector<Workload>& workloads() {
        "<Middlebury scene folder, or a folder of them> [--resolution R[,R...]]\n"
        "      [--input full,half,quarter] [--source gt,sgbm] [--frames N] [--warmup W]\n"
        "      [--repetitions K] [--jitter M] [--jitter_deg D] [--sigma S] [--block_size B]\n"
-       "      [--threads T] [--clock cpu|wall] [--rtabmap FOLDER]\n"
+       "      [--threads T] [--clock cpu|wall] [--unknown_neighbour_occupancy P] [--rtabmap DIR]\n"
        "      [--picture PREFIX [--picture_scene S] [--picture_resolution R]]\n"
        "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
        "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
        "      the same points; ratios are ours / octomap",
        {"folder", "resolution", "input", "source", "frames", "warmup", "repetitions", "jitter",
         "jitter_deg", "sigma", "block_size", "threads", "clock", "rtabmap", "picture",
-        "picture_scene", "picture_resolution"},
+        "picture_scene", "picture_resolution", "unknown_neighbour_occupancy"},
        runDisparity},
       {"disparity-artifacts",
        "[--part all|artifacts|fig5a] [--frames N] [--resolution R] [--fig5a_updates U]\n"

@@ -191,8 +191,12 @@ struct MapRun {
   std::size_t points_per_frame = 0;
 };
 
+// P(O) of never-observed neighbours in Eq. 1 (--unknown_neighbour_occupancy); the core's default.
+double g_unknown_neighbour_occupancy = VisibilityStereoConfig().unknown_neighbour_occupancy;
+
 VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
   VisibilityStereoConfig config;
+  config.unknown_neighbour_occupancy = g_unknown_neighbour_occupancy;
   config.disparity.disparity_sigma_px = sigma_px;
   config.disparity.input_resolution = input;
   return config;
@@ -564,15 +568,19 @@ void runRtabmap(const std::string& folder, const Options& options) {
   if (!left_yaml.isOpened() || !right_yaml.isOpened()) {
     throw std::runtime_error(folder + ": cannot read stereo_left.yaml / stereo_right.yaml");
   }
-  cv::Mat K, P_right;
-  left_yaml["camera_matrix"] >> K;
-  right_yaml["projection_matrix"] >> P_right;
+  // camera_info-style YAML: rows, cols and a flat "data" list (no OpenCV matrix type tag).
+  std::vector<double> K, P_right;
+  left_yaml["camera_matrix"]["data"] >> K;
+  right_yaml["projection_matrix"]["data"] >> P_right;
+  if (K.size() != 9 || P_right.size() != 12) {
+    throw std::runtime_error(folder + ": expected a 3x3 camera_matrix and a 3x4 projection_matrix");
+  }
   StereoCamera camera;
-  camera.fx = K.at<double>(0, 0);
-  camera.fy = K.at<double>(1, 1);
-  camera.cx = K.at<double>(0, 2);
-  camera.cy = K.at<double>(1, 2);
-  camera.baseline = -P_right.at<double>(0, 3) / P_right.at<double>(0, 0);  // Tx = -fx * B
+  camera.fx = K[0];
+  camera.fy = K[4];
+  camera.cx = K[2];
+  camera.cy = K[5];
+  camera.baseline = -P_right[3] / P_right[0];  // Tx = -fx * B
   std::vector<std::string> ids;
   for (const fs::directory_entry& entry : fs::directory_iterator(fs::path(folder) / "left")) {
     if (entry.path().extension() == ".jpg") ids.push_back(entry.path().stem().string());
@@ -618,6 +626,8 @@ int runDisparity(const CommandLine& args) {
   options.jitter_m = args.doubleValue("jitter", 0.0);
   options.jitter_deg = args.doubleValue("jitter_deg", 0.0);
   options.sigma_px = args.doubleValue("sigma", 0.5);
+  g_unknown_neighbour_occupancy =
+      args.doubleValue("unknown_neighbour_occupancy", g_unknown_neighbour_occupancy);
   options.sgbm.block_size = args.intValue("block_size", 5);
   options.picture = args.value("picture", "");
   options.picture_scene = args.value("picture_scene", "Motorcycle");
@@ -637,9 +647,10 @@ int runDisparity(const CommandLine& args) {
   std::printf(
       "# disparity: %d timed frames per case after %d untimed (jitter %g m, %g deg), median of %d "
       "repetitions, "
-      "sigma_d=%g px, threads=%d (liboctomap: 1), SGBM block %d, clock=%s\n",
+      "sigma_d=%g px, unknown_neighbour_occupancy=%g, threads=%d (liboctomap: 1), SGBM block %d, "
+      "clock=%s\n",
       options.frames, options.warmup, options.jitter_m, options.jitter_deg, options.repetitions,
-      options.sigma_px, options.threads, options.sgbm.block_size,
+      options.sigma_px, g_unknown_neighbour_occupancy, options.threads, options.sgbm.block_size,
       options.cpu_clock ? "cpu" : "wall");
   std::vector<CaseResult> results;
   for (const std::string& scene_path : findMiddleburyScenes(args.required("folder"))) {
