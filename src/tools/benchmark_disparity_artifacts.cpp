@@ -308,14 +308,18 @@ double farthestOccupied(const VoxelMap& map, const Eigen::Vector3d& origin) {
 }
 
 // Row k: the distance after update k + 1.
-std::vector<double> mappedDistanceGrowth(const VisibilityStereoConfig& config, double resolution,
+std::vector<double> mappedDistanceGrowth(VisibilityStereoConfig config, double resolution,
                                          int updates) {
+  // Far pixels' noise makes disparities near 0, points kilometres away: cleared up to the
+  // corridor's length, as octomap_server's max_range does.
+  config.max_range = kFig5aRange;
   const sim::Scene scene = sim::makeCorridorScene();
   const sim::PinholeCamera camera = corridorCamera();
-  const Eigen::Isometry3d pose = corridorPoses(1).front();
-  sim::DisparityNoise noise;  // the matcher's white noise only: the same image every update
-  noise.sigma_px = 0.3;
-  noise.seed = 5;
+  const Eigen::Isometry3d pose = corridorPoses(2).front();
+  // The exact disparity, the same image every update. (With white noise, pixels near the end
+  // wall get disparities near 0 and sigma_z of kilometres: P(I_v) ~ 0.5 along their whole ray,
+  // and the reduction's maximum over rays turns the voxels next to the sensor occupied.)
+  const sim::DisparityNoise noise;
   const sim::DisparityImage image =
       sim::renderDisparity(scene, camera, kBaseline, pose, kFig5aRange, noise, 0);
   const DisparityImageView view{image.width, image.height, image.disparity.data(), 0};
