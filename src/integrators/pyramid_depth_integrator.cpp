@@ -7,7 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include <tsl/robin_map.h>
+#include "occupancy_fusion/map/spatial_key.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -23,12 +23,6 @@ void require(bool condition, const std::string& message) {
 }
 
 bool isValidMeasurement(float value) { return !std::isnan(value); }
-
-std::uint64_t packBlock(const BlockIndex& block) {
-  constexpr std::uint64_t kMask21 = (std::uint64_t{1} << 21) - 1;
-  auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & kMask21; };
-  return field(block.x()) | (field(block.y()) << 21) | (field(block.z()) << 42);
-}
 
 // Level i with t_{i+1} < distance <= t_i (Eq. 12 with the layers' distances decreasing in i);
 // -1 when the voxel lies beyond t_0.
@@ -139,7 +133,10 @@ float DepthInverseModel::logOdds(double distance, double measured) const {
 DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
                                  double t0, int levels, double max_range,
                                  PyramidSelection selection)
-    : t0_(t0), layers_(std::max(levels, 1)) {
+    : thresholds_(std::max(levels, 1)), layers_(std::max(levels, 1)) {
+  for (std::size_t level = 0; level < thresholds_.size(); ++level) {
+    thresholds_[level] = t0 / static_cast<double>(1 << level);
+  }
   camera.validate();
   depth.validateAgainst(camera);
   Layer& distances = layers_[0];
@@ -175,8 +172,6 @@ int DistancePyramid::levelCount(const CameraIntrinsics& camera, double t0, doubl
   return levels;
 }
 
-double DistancePyramid::threshold(int level) const { return t0_ / static_cast<double>(1 << level); }
-
 void DistancePyramid::buildLayer(int level, PyramidSelection selection) {
   // Eq. 10 reads the full-resolution M, not the layer below: the measurement closest to t_i
   // need not have been kept for t_{i-1}.
@@ -187,25 +182,43 @@ void DistancePyramid::buildLayer(int level, PyramidSelection selection) {
   layer.height = (full.height + side - 1) / side;
   layer.cells.assign(static_cast<std::size_t>(layer.width) * layer.height, kNaN);
   const float target = static_cast<float>(threshold(level));
+  if (selection == PyramidSelection::kMinimum) {
+    fillLayer(
+        full, level, [](float value) { return value; }, &layer);
+  } else {
+    fillLayer(
+        full, level, [target](float value) { return std::abs(value - target); }, &layer);
+  }
+}
+
+template <class Score>
+void DistancePyramid::fillLayer(const Layer& full, int level, Score score, Layer* layer) {
   // Row by row through M, keeping each cell's best so far: the same candidates in the same
   // order (rows of a cell top to bottom, each left to right) as a cell-by-cell scan, so ties go
   // to the same measurement. NaN scores never compare smaller, so invalid pixels drop out.
-  std::vector<float> best_score(static_cast<std::size_t>(layer.width));
-  for (int cell_v = 0; cell_v < layer.height; ++cell_v) {
-    float* best = &layer.cells[static_cast<std::size_t>(cell_v) * layer.width];
+  // Within a row the best of the cell's run of pixels is kept in registers and merged once
+  // (strictly smaller wins, so the earlier row keeps ties): no store-to-load chain per pixel.
+  const int side = 1 << level;
+  std::vector<float> best_score(static_cast<std::size_t>(layer->width));
+  for (int cell_v = 0; cell_v < layer->height; ++cell_v) {
+    float* best = &layer->cells[static_cast<std::size_t>(cell_v) * layer->width];
     std::fill(best_score.begin(), best_score.end(), std::numeric_limits<float>::infinity());
     const int v_end = std::min(full.height, (cell_v + 1) * side);
     for (int v = cell_v * side; v < v_end; ++v) {
       const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
-      for (int u = 0; u < full.width; ++u) {
-        const float value = row[u];
-        const float score =
-            selection == PyramidSelection::kMinimum ? value : std::abs(value - target);
-        const int cell_u = u >> level;
-        if (score < best_score[cell_u]) {
-          best_score[cell_u] = score;
-          best[cell_u] = value;
+      for (int cell_u = 0; cell_u < layer->width; ++cell_u) {
+        const int u_end = std::min(full.width, (cell_u + 1) * side);
+        float run_score = best_score[cell_u];
+        float run_value = best[cell_u];
+        for (int u = cell_u * side; u < u_end; ++u) {
+          const float candidate = score(row[u]);
+          if (candidate < run_score) {
+            run_score = candidate;
+            run_value = row[u];
+          }
         }
+        best_score[cell_u] = run_score;
+        best[cell_u] = run_value;
       }
     }
   }
@@ -258,11 +271,13 @@ std::optional<float> PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& 
   return pyramidLogOdds(frame, uv, distance);
 }
 
-PyramidDepthIntegrator::LayerSample PyramidDepthIntegrator::bilinearLogOdds(
-    const DepthFrame& frame, int level, const Eigen::Vector2d& uv, double distance) const {
+PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(const DepthFrame& frame,
+                                                                       int level,
+                                                                       const Eigen::Vector2d& uv,
+                                                                       double distance) const {
   // Eq. 14 with pixel centres at integer coordinates: cell U of layer i is centred on pixel
-  // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5.
-  const double scale = 1.0 / static_cast<double>(1 << level);
+  // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5. (2^-i is exact: a multiply.)
+  const double scale = std::ldexp(1.0, -level);
   const double u = (uv.x() + 0.5) * scale - 0.5;
   const double v = (uv.y() + 0.5) * scale - 0.5;
   const int u0 = static_cast<int>(std::floor(u));
@@ -271,9 +286,7 @@ PyramidDepthIntegrator::LayerSample PyramidDepthIntegrator::bilinearLogOdds(
   const double fv = v - v0;
   const int width = frame.pyramid.width(level);
   const int height = frame.pyramid.height(level);
-  LayerSample sample;
-  double weighted = 0.0;
-  double weight_sum = 0.0;
+  LayerCells cells;
   for (int dv = 0; dv <= 1; ++dv) {
     for (int du = 0; du <= 1; ++du) {
       const double weight = (du ? fu : 1.0 - fu) * (dv ? fv : 1.0 - fv);  // Eq. 15
@@ -283,15 +296,22 @@ PyramidDepthIntegrator::LayerSample PyramidDepthIntegrator::bilinearLogOdds(
       const float measured = frame.pyramid.at(level, cu, cv);
       // Invalid pixels contribute nothing: Eq. 15 is renormalised over the valid neighbours.
       if (!isValidMeasurement(measured)) continue;
-      weighted += weight * cellLogOdds(distance, measured);
-      weight_sum += weight;
-      sample.informs = sample.informs || model_.informs(distance, measured);
+      cells.weights[cells.count] = weight;
+      cells.measured[cells.count] = measured;
+      ++cells.count;
+      cells.weight_sum += weight;
+      cells.informs = cells.informs || model_.informs(distance, measured);
     }
   }
-  if (weight_sum <= 0.0) return sample;
-  sample.valid = true;
-  sample.log_odds = static_cast<float>(weighted / weight_sum);
-  return sample;
+  return cells;
+}
+
+float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells, double distance) const {
+  double weighted = 0.0;
+  for (int i = 0; i < cells.count; ++i) {
+    weighted += cells.weights[i] * cellLogOdds(distance, cells.measured[i]);  // Eq. 16
+  }
+  return static_cast<float>(weighted / cells.weight_sum);
 }
 
 std::optional<float> PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame,
@@ -301,20 +321,22 @@ std::optional<float> PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& fr
   const int level = bracketingLevel(pyramid, distance);
   // Beyond t_0, or nearer than the last layer's t: one layer alone.
   if (level < 0 || level + 1 >= pyramid.levels()) {
-    const LayerSample only = bilinearLogOdds(frame, std::max(level, 0), uv, distance);
-    if (!only.valid || !only.informs) return std::nullopt;
-    return only.log_odds;
+    const LayerCells only = gatherCells(frame, std::max(level, 0), uv, distance);
+    if (!only.valid() || !only.informs) return std::nullopt;
+    return bilinearLogOdds(only, distance);
   }
-  const LayerSample fine = bilinearLogOdds(frame, level, uv, distance);
-  const LayerSample coarse = bilinearLogOdds(frame, level + 1, uv, distance);
+  const LayerCells fine = gatherCells(frame, level, uv, distance);
+  const LayerCells coarse = gatherCells(frame, level + 1, uv, distance);
   if (!(fine.informs || coarse.informs)) return std::nullopt;
-  if (!fine.valid) return coarse.log_odds;
-  if (!coarse.valid) return fine.log_odds;
+  if (!fine.valid()) return bilinearLogOdds(coarse, distance);
+  if (!coarse.valid()) return bilinearLogOdds(fine, distance);
+  const float fine_log_odds = bilinearLogOdds(fine, distance);  // float: Eq. 17 subtracts in float
+  const float coarse_log_odds = bilinearLogOdds(coarse, distance);
   const double t_fine = pyramid.threshold(level);
   const double t_coarse = pyramid.threshold(level + 1);
   // Eq. 17: l^i at z = t_i, l^{i+1} at z = t_{i+1}, linear in between.
-  return static_cast<float>(fine.log_odds + (distance - t_fine) *
-                                                (coarse.log_odds - fine.log_odds) /
+  return static_cast<float>(fine_log_odds + (distance - t_fine) *
+                                                (coarse_log_odds - fine_log_odds) /
                                                 (t_coarse - t_fine));
 }
 
@@ -595,11 +617,11 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   DepthIntegrationStats stats;
   stats.candidate_blocks = candidates.size();
   std::vector<BlockIndex> touched;
-  tsl::robin_map<std::uint64_t, int> slot_of;
+  SpatialKeyMap<int> slot_of;
   for (int i = 0; i < count; ++i) {
     if (updated[i] == 0) continue;
     touched.push_back(candidates[i].index);
-    slot_of[packBlock(candidates[i].index)] = i;
+    slot_of[packKey(candidates[i].index)] = i;
     stats.voxels_updated += updated[i];
   }
   stats.blocks_updated = touched.size();
@@ -609,7 +631,7 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   // Eq. 3 with l_0 = 0, clamped like OctoMap.
   map->updateBlocks(touched, [&](const BlockIndex& index, VoxelBlock& block) {
     const float* block_deltas =
-        &deltas[static_cast<std::size_t>(slot_of.at(packBlock(index))) * VoxelBlock::kVolume];
+        &deltas[static_cast<std::size_t>(slot_of.at(packKey(index))) * VoxelBlock::kVolume];
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       if (!std::isnan(block_deltas[linear])) {
         block.update(linear, block_deltas[linear], min_log_odds, max_log_odds);

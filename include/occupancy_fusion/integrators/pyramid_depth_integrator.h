@@ -93,7 +93,7 @@ class DistancePyramid {
                         int max_levels);
 
   int levels() const { return static_cast<int>(layers_.size()); }
-  double threshold(int level) const;  // t_i = t0 / 2^i (Eq. 11)
+  double threshold(int level) const { return thresholds_[level]; }  // t_i = t0 / 2^i (Eq. 11)
   int width(int level) const { return layers_[level].width; }
   int height(int level) const { return layers_[level].height; }
   float at(int level, int u, int v) const {
@@ -108,9 +108,12 @@ class DistancePyramid {
     std::vector<float> cells;
   };
   void buildLayer(int level, PyramidSelection selection);
+  // Layer `level` keeps, per cell, the first measurement of least score(measurement).
+  template <class Score>
+  static void fillLayer(const Layer& full, int level, Score score, Layer* layer);
 
-  double t0_;
-  std::vector<Layer> layers_;  // layers_[0] is M itself
+  std::vector<double> thresholds_;  // t_i per layer, read for every voxel
+  std::vector<Layer> layers_;       // layers_[0] is M itself
 };
 
 // One depth image prepared for per-voxel queries at one map resolution.
@@ -183,13 +186,20 @@ class PyramidDepthIntegrator {
                                   const Eigen::Isometry3d& T_map_camera, VoxelMap* map) const;
 
  private:
-  struct LayerSample {
-    bool valid = false;    // at least one measurement with non-zero weight
+  // The valid cells of one layer that Eq. 15 weighs for a voxel (at most four), gathered
+  // before any Eq. 7 evaluation: a voxel none of whose cells informs it (behind every surface
+  // it sees) is rejected after a few comparisons.
+  struct LayerCells {
+    int count = 0;
+    double weights[4] = {};
+    float measured[4] = {};
+    double weight_sum = 0.0;
     bool informs = false;  // at least one of them informs the voxel
-    float log_odds = 0.0f;
+    bool valid() const { return weight_sum > 0.0; }
   };
-  LayerSample bilinearLogOdds(const DepthFrame& frame, int level, const Eigen::Vector2d& uv,
-                              double distance) const;  // Eq. 14-16
+  LayerCells gatherCells(const DepthFrame& frame, int level, const Eigen::Vector2d& uv,
+                         double distance) const;                          // Eq. 14-15
+  float bilinearLogOdds(const LayerCells& cells, double distance) const;  // Eq. 16
   std::optional<float> pyramidLogOdds(const DepthFrame& frame, const Eigen::Vector2d& uv,
                                       double distance) const;  // Eq. 12, 17
   std::optional<float> andertLogOdds(const DepthFrame& frame, const Eigen::Vector2d& uv,
