@@ -29,10 +29,12 @@ std::vector<long double> cellMasses(double range, int first, int last,
     mass[static_cast<std::size_t>(static_cast<int>(range / c.range_resolution) - first)] = 1.0L;
     return mass;
   }
+  // A cell's upper edge is the next cell's lower edge: one CDF evaluation per edge.
+  double below = gaussianCdf((first * c.range_resolution - range) / c.range_sigma);
   for (int k = first; k <= last; ++k) {
-    const double lower = (k * c.range_resolution - range) / c.range_sigma;
-    const double upper = ((k + 1) * c.range_resolution - range) / c.range_sigma;
-    mass[static_cast<std::size_t>(k - first)] = gaussianCdf(upper) - gaussianCdf(lower);
+    const double above = gaussianCdf(((k + 1) * c.range_resolution - range) / c.range_sigma);
+    mass[static_cast<std::size_t>(k - first)] = above - below;
+    below = above;
   }
   return mass;
 }
