@@ -216,7 +216,7 @@ void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
   } else {
     text << "  2D view: " << outputs.grid_width << " x " << outputs.grid_height << " cells";
     const FusedGridConfig& band = mapper.config().fused_grid;
-    if (std::isinf(band.min_z) && std::isinf(band.max_z)) {
+    if (std::isinf(band.min_z) && std::isinf(band.max_z) && mapper.map().knownVoxelCount() > 0) {
       text << " (occupancy_min_z/occupancy_max_z unset: every height is projected, floor too)";
     }
     text << "\n";

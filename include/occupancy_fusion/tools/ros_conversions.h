@@ -53,6 +53,10 @@ std::vector<float> disparityFromMessage(const stereo_msgs::DisparityImage& messa
 StereoCamera stereoCameraFrom(const stereo_msgs::DisparityImage& message,
                               const sensor_msgs::CameraInfo& left_info);
 
+// The same without camera_info: principal point at the image centre ((width - 1) / 2,
+// (height - 1) / 2), fy = f.
+StereoCamera stereoCameraAtImageCentre(const stereo_msgs::DisparityImage& message);
+
 // Messages for simulated recordings.
 sensor_msgs::CameraInfo cameraInfoMessage(const CameraIntrinsics& camera,
                                           const std::string& frame_id, const ros::Time& stamp);

@@ -62,7 +62,9 @@ struct RosbagTopics {
 //
 // Camera infos: a depth image on .../NAME uses .../camera_info (image_transport's convention); a
 // disparity image on .../NAME uses .../camera_info, else .../left/camera_info (stereo_image_proc's
-// layout). The camera_info nearest in time to the image is used.
+// layout). The camera_info nearest in time to the image is used. A depth image without one is
+// skipped; a disparity topic without any (a DisparityImage carries f and the baseline itself)
+// takes its principal point at the image centre, and description() says so.
 class RosbagReader : public InputReader {
  public:
   // Opens the bags. With `topics` empty every topic of a supported type is mapped: every
@@ -81,6 +83,8 @@ class RosbagReader : public InputReader {
   void read(FrameConsumer* consumer, const std::function<void(std::size_t)>& after_frame) override;
 
   const RosbagTopics& topics() const { return topics_; }
+  // Disparity topics that have no camera_info in the bags.
+  std::vector<std::string> disparityTopicsWithoutCameraInfo() const;
   const std::vector<std::string>& cloudTopics() const { return topics_.clouds; }
 
  private:

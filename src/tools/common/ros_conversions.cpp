@@ -184,6 +184,17 @@ StereoCamera stereoCameraFrom(const stereo_msgs::DisparityImage& message,
   return camera;
 }
 
+StereoCamera stereoCameraAtImageCentre(const stereo_msgs::DisparityImage& message) {
+  StereoCamera camera;
+  camera.fx = message.f;
+  camera.fy = message.f;
+  camera.cx = (static_cast<double>(message.image.width) - 1.0) / 2.0;
+  camera.cy = (static_cast<double>(message.image.height) - 1.0) / 2.0;
+  camera.baseline = message.T;
+  camera.validate();
+  return camera;
+}
+
 sensor_msgs::CameraInfo cameraInfoMessage(const CameraIntrinsics& camera,
                                           const std::string& frame_id, const ros::Time& stamp) {
   sensor_msgs::CameraInfo info;

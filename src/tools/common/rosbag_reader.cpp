@@ -251,6 +251,18 @@ const sensor_msgs::CameraInfo* RosbagReader::nearestCameraInfo(
   return nullptr;
 }
 
+std::vector<std::string> RosbagReader::disparityTopicsWithoutCameraInfo() const {
+  std::vector<std::string> topics;
+  for (const std::string& topic : topics_.disparity_images) {
+    bool has_info = false;
+    for (const std::string& info : disparityInfoTopics(topic)) {
+      has_info = has_info || camera_infos_.count(info) > 0;
+    }
+    if (!has_info) topics.push_back(topic);
+  }
+  return topics;
+}
+
 std::string RosbagReader::description() const {
   std::ostringstream text;
   text << "rosbag " << joined(paths_) << ": " << frame_count_ << " frames";
@@ -262,6 +274,11 @@ std::string RosbagReader::description() const {
   kind("DisparityImage", topics_.disparity_images);
   kind("LaserScan", topics_.scans);
   text << ", " << poses_->transformCount() << " tf transforms";
+  const std::vector<std::string> without_info = disparityTopicsWithoutCameraInfo();
+  if (!without_info.empty()) {
+    text << " (no camera_info for " << joined(without_info)
+         << ": principal point at the image centre)";
+  }
   return text.str();
 }
 
@@ -307,11 +324,11 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
     const sensor_msgs::CameraInfo* info =
         nearestCameraInfo(disparityInfoTopics(topic), frame.header.stamp, &why);
     try {
-      if (info == nullptr) throw std::invalid_argument(why);
       frame.disparity = disparityFromMessage(*disparity);
       frame.width = static_cast<int>(disparity->image.width);
       frame.height = static_cast<int>(disparity->image.height);
-      frame.camera = stereoCameraFrom(*disparity, *info);
+      frame.camera = info != nullptr ? stereoCameraFrom(*disparity, *info)
+                                     : stereoCameraAtImageCentre(*disparity);
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());
       return;

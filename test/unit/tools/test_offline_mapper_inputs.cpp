@@ -24,6 +24,7 @@
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"
 #include "occupancy_fusion/tools/ros_conversions.h"
+#include "occupancy_fusion/tools/rosbag_reader.h"
 #include "occupancy_fusion/tools/simulated_recording.h"
 #include "tool_test_support.h"
 
@@ -470,6 +471,52 @@ TEST_F(InputKindsTest, BadInputArgumentsExitWithTwo) {
                             " laser scans"),
             std::string::npos)
       << beyond.err;
+}
+
+struct DisparityCollector : FrameConsumer {
+  void onPointCloud(const PointCloudFrame&) override {}
+  void onDepthImage(const DepthImageFrame&) override {}
+  void onDisparityImage(const DisparityFrame& frame) override { frames.push_back(frame); }
+  void onLaserScan(const LaserScanFrame&) override {}
+  void onUnreadable(const FrameHeader&, const std::string& why) override { errors.push_back(why); }
+  std::vector<DisparityFrame> frames;
+  std::vector<std::string> errors;
+};
+
+// A DisparityImage without camera_info (as some recordings have): f and T from the message, the
+// principal point at the image centre; values outside [min, max] disparity are no match.
+TEST(RosbagReaderDisparity, WithoutCameraInfoUsesTheImageCentre) {
+  ros::Time::init();
+  const fs::path dir = makeTempDir();
+  StereoCamera camera;
+  camera.fx = 200.0;
+  camera.baseline = 0.25;
+  const std::vector<float> values = {0.0f, 10.0f, 20.0f, 300.0f, 40.0f, 50.0f};  // 3 x 2
+  {
+    rosbag::Bag bag((dir / "d.bag").string(), rosbag::bagmode::Write);
+    const ros::Time stamp(5.0);
+    bag.write("/stereo/disparity", stamp,
+              disparityMessage(values, 3, 2, camera, 1.0, 256.0, "cam", stamp));
+    bag.close();
+  }
+  RosbagReader reader({(dir / "d.bag").string()}, RosbagTopics());
+  EXPECT_EQ(reader.disparityTopicsWithoutCameraInfo(),
+            std::vector<std::string>{"/stereo/disparity"});
+  EXPECT_NE(reader.description().find("principal point at the image centre"), std::string::npos);
+  DisparityCollector collector;
+  reader.read(&collector, nullptr);
+  ASSERT_EQ(collector.frames.size(), 1u);
+  const DisparityFrame& frame = collector.frames[0];
+  EXPECT_DOUBLE_EQ(frame.camera.cx, 1.0);
+  EXPECT_DOUBLE_EQ(frame.camera.cy, 0.5);
+  EXPECT_DOUBLE_EQ(frame.camera.fx, 200.0);
+  EXPECT_DOUBLE_EQ(frame.camera.baseline, 0.25);
+  EXPECT_TRUE(std::isnan(frame.disparity[0]));  // 0 < min_disparity: no match
+  EXPECT_FLOAT_EQ(frame.disparity[1], 10.0f);
+  EXPECT_TRUE(std::isnan(frame.disparity[3]));  // 300 > max_disparity
+  EXPECT_FLOAT_EQ(frame.disparity[5], 50.0f);
+  EXPECT_EQ(frame.header.kind, "disparity");
+  fs::remove_all(dir);
 }
 
 TEST(SimulateRecordingSensors, WritesTheChosenSensorsAndRejectsUnknownOnes) {
