@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <iosfwd>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
@@ -16,6 +17,7 @@
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/params/laser_config_reader.h"
 #include "occupancy_fusion/params/parameter_source.h"
 #include "occupancy_fusion/tools/recording.h"
 
@@ -29,14 +31,19 @@ struct RecordingMapperConfig {
   VisibilityStereoConfig stereo;     // disparity images (Schauwecker & Zell)
   PolarLaserIntegratorConfig laser;  // laser scans into the 2D layer (Yguel et al.)
   double laser_max_tilt = 0.1;       // rad, largest tilt of a scan plane from the map's x-y plane
-  FusedGridConfig fused_grid;        // height band of the 2D view
+  // Per-scanner settings (costmap_2d-style observation sources of the laser mapper): a scan
+  // whose topic is a source's topic uses that source's integrator, max_tilt and sensor_frame;
+  // other scans use `laser` and laser_max_tilt.
+  std::vector<LaserSourceConfig> laser_sources;
+  FusedGridConfig fused_grid;  // height band of the 2D view
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
 // frame_id, then the parameters of readVoxelMapConfig, readPointCloudIntegratorConfig,
 // readPyramidDepthConfig (depth/...), readVisibilityStereoConfig (stereo/...),
-// readPolarLaserIntegratorConfig under laser/ (and laser/max_tilt) and readFusedGridConfig: the
+// readPolarLaserIntegratorConfig under laser/ (and laser/max_tilt), readLaserSourceConfigs where
+// observation_sources is given, and readFusedGridConfig: the
 // same keys the mapper nodelets and map server read, so their YAML files can be merged.
 RecordingMapperConfig readRecordingMapperConfig(const ParameterSource& source);
 
@@ -104,6 +111,8 @@ class RecordingMapper : public FrameConsumer {
   PyramidDepthIntegrator depth_integrator_;
   VisibilityStereoIntegrator stereo_integrator_;
   PolarLaserIntegrator laser_integrator_;
+  // One integrator per configured laser source (each keeps its own exact-overlay cache).
+  std::vector<std::unique_ptr<PolarLaserIntegrator>> source_integrators_;
   RecordingStatistics statistics_;
 };
 

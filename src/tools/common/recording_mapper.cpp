@@ -22,6 +22,18 @@ std::vector<Eigen::Vector3f> transformed(const std::vector<Eigen::Vector3f>& poi
   return result;
 }
 
+bool hasKey(const ParameterSource& source, const std::string& key) {
+  for (const std::string& present : source.keys()) {
+    if (present == key || present.rfind(key + "/", 0) == 0) return true;
+  }
+  return false;
+}
+
+// Topics as configured ("front/scan") and as recorded ("/front/scan") name the same topic.
+std::string withoutLeadingSlash(const std::string& topic) {
+  return topic.rfind('/', 0) == 0 ? topic.substr(1) : topic;
+}
+
 GridLayer2DConfig laserLayerConfig(const VoxelMapConfig& map) {
   GridLayer2DConfig layer;
   layer.resolution = map.resolution;
@@ -38,6 +50,7 @@ void RecordingMapperConfig::validate() const {
   depth.validate();
   stereo.validate();
   laser.validate();
+  for (const LaserSourceConfig& laser_source : laser_sources) laser_source.validate();
   if (!(laser_max_tilt >= 0.0 && laser_max_tilt < M_PI / 2)) {
     throw std::invalid_argument("laser/max_tilt must be in [0, pi/2) rad");
   }
@@ -53,6 +66,7 @@ RecordingMapperConfig readRecordingMapperConfig(const ParameterSource& source) {
   config.stereo = readVisibilityStereoConfig(source);
   config.laser = readPolarLaserIntegratorConfig(source, "laser/");
   source.get("laser/max_tilt", &config.laser_max_tilt);
+  if (hasKey(source, "observation_sources")) config.laser_sources = readLaserSourceConfigs(source);
   config.fused_grid = readFusedGridConfig(source);
   config.validate();
   return config;
@@ -82,6 +96,9 @@ RecordingMapper::RecordingMapper(const RecordingMapperConfig& config, const Pose
       stereo_integrator_(config.stereo),
       laser_integrator_(config.laser) {
   config_.validate();
+  for (const LaserSourceConfig& laser_source : config_.laser_sources) {
+    source_integrators_.push_back(std::make_unique<PolarLaserIntegrator>(laser_source.integrator));
+  }
 }
 
 void RecordingMapper::onPointCloud(const PointCloudFrame& frame) {
@@ -135,18 +152,29 @@ void RecordingMapper::onLaserScan(const LaserScanFrame& frame) {
     skip(frame.header, "bad laser scan on " + frame.header.source, error.what());
     return;
   }
-  const std::optional<Eigen::Isometry3d> map_T_sensor = poseOf(frame.header);
+  PolarLaserIntegrator* integrator = &laser_integrator_;
+  double max_tilt = config_.laser_max_tilt;
+  FrameHeader header = frame.header;
+  for (std::size_t i = 0; i < config_.laser_sources.size(); ++i) {
+    const LaserSourceConfig& laser_source = config_.laser_sources[i];
+    if (withoutLeadingSlash(laser_source.topic) != withoutLeadingSlash(header.source)) continue;
+    integrator = source_integrators_[i].get();
+    max_tilt = laser_source.max_tilt;
+    if (!laser_source.sensor_frame.empty()) header.frame_id = laser_source.sensor_frame;
+    break;
+  }
+  const std::optional<Eigen::Isometry3d> map_T_sensor = poseOf(header);
   if (!map_T_sensor) return;
   bool upside_down = false;
   Pose2D sensor;
   try {
-    sensor = planarPose(*map_T_sensor, config_.laser_max_tilt, &upside_down);
+    sensor = planarPose(*map_T_sensor, max_tilt, &upside_down);
   } catch (const std::invalid_argument& error) {
-    skip(frame.header, "scan plane of '" + frame.header.frame_id + "' tilted", error.what());
+    skip(header, "scan plane of '" + header.frame_id + "' tilted", error.what());
     return;
   }
-  laser_integrator_.integrateIntoLayer(upside_down ? mirrorScan(frame.scan) : frame.scan, sensor,
-                                       &laser_layer_);
+  integrator->integrateIntoLayer(upside_down ? mirrorScan(frame.scan) : frame.scan, sensor,
+                                 &laser_layer_);
   countIntegrated("laser", frame.scan.ranges.size(), start);
 }
 

@@ -275,6 +275,18 @@ TEST_F(InputKindsTest, BadFramesInABagAreSkippedAndCounted) {
   EXPECT_NE(result.out.find("skipped 1: no transform from 'unmounted_laser' to 'map'"),
             std::string::npos)
       << result.out;
+
+  // A laser observation source (the laser mapper's per-scanner block) whose sensor_frame
+  // overrides the scans' frame: the stray scan is placed too.
+  std::ofstream(dir_ / "sources.yaml")
+      << "observation_sources: front\nfront: {topic: scan_front, sensor_frame: laser_front}\n";
+  const RunResult with_source = map("--bag " + quoted(bag_path) + " --scan-topic /scan_front",
+                                    "source", "--config " + quoted(dir_ / "sources.yaml"));
+  ASSERT_EQ(with_source.exit_code, 0) << with_source.err;
+  EXPECT_NE(
+      with_source.out.find("laser: " + std::to_string(kFrames + 1) + " integrated, 0 skipped"),
+      std::string::npos)
+      << with_source.out;
 }
 
 // A 7-Scenes folder written here: 16-bit PNGs in mm (OpenCV), camera-to-world poses, K.
