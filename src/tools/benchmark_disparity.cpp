@@ -538,9 +538,8 @@ void drawPicture(const StereoView& view, const StereoView& truth, const Options&
   char ours_title[160], octomap_title[160];
   std::snprintf(ours_title, sizeof(ours_title), "visibility method: %zu occupied, %.0f KB",
                 ours.size(), map.memoryBytes() / 1024.0);
-  std::snprintf(octomap_title, sizeof(octomap_title),
-                "liboctomap insertPointCloud: %zu occupied, %.0f KB", octomap.size(),
-                tree.memoryUsage() / 1024.0);
+  std::snprintf(octomap_title, sizeof(octomap_title), "liboctomap: %zu occupied, %.0f KB",
+                octomap.size(), tree.memoryUsage() / 1024.0);
   cv::Mat left_panel = drawViews(ours, options.picture_resolution, view.camera, view.width,
                                  view.height, z_min, z_max, ours_title);
   cv::Mat right_panel = drawViews(octomap, options.picture_resolution, view.camera, view.width,
