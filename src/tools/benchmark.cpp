@@ -30,6 +30,8 @@ namespace occupancy_fusion {
 
 int runPublish(const CommandLine& args);  // benchmark_publish.cpp
 int runDepth(const CommandLine& args);    // benchmark_depth.cpp
+int runDepthFig5(const CommandLine& args);      // benchmark_depth_fig5.cpp
+int runDepthAccuracy(const CommandLine& args);  // benchmark_depth_accuracy.cpp
 int runLaser(const CommandLine& args);    // benchmark_laser.cpp
 int runLaserMap(const CommandLine& args);  // benchmark_laser_map.cpp
 int runDisparity(const CommandLine& args);  // benchmark_disparity.cpp
@@ -221,13 +223,26 @@ const std::vector<Workload>& workloads() {
        runPublish},
       {"depth",
        "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--k K] "
-       "[--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal]\n"
+       "[--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal] [--image PNG]\n"
        "      a depth sequence in the 7-Scenes layout through the pyramidal depth integrator,\n"
        "      and K of its frames as point clouds through octomap::OcTree::insertPointCloud\n"
        "      (plain and discretized); speedup is octomap / ours in ms per frame",
        {"folder", "resolution", "frames", "octomap-frames", "k", "sigma", "sigma_quadratic",
-        "method"},
+        "method", "image"},
        runDepth},
+      {"depth-fig5",
+       "[--output PNG] [--sweep_max PX]\n"
+       "      Pirker et al.'s Fig. 5: occupancy along the optical axis (obstacles at 6 and 10 m)\n"
+       "      for ideal, pyramid and Andert, errors against ideal, plot; edge moved off the axis",
+       {"output", "sweep_max"},
+       runDepthFig5},
+      {"depth-accuracy",
+       "[--scenes box,spheres] [--methods pyramid,andert,ideal] [--views N] [--resolution R]\n"
+       "      [--k K] [--sigma S] [--max_range M]\n"
+       "      Pirker et al. Sec. 5.1: N of the 181 sweep views of BOX / SPHERES; surface points\n"
+       "      within one voxel of the p = 0.5 iso-surface, observed free voxels labelled free",
+       {"scenes", "methods", "views", "resolution", "k", "sigma", "max_range"},
+       runDepthAccuracy},
       {"laser",
        "<CARMEN log, .gz accepted> [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"
        "      [--images PREFIX [--image_scan I]]\n"

@@ -3,9 +3,16 @@
 #include <octomap/OcTree.h>
 #include <omp.h>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <ctime>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -23,6 +30,14 @@ using Clock = std::chrono::steady_clock;
 
 double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// CPU time of all the process's threads: on a shared machine wall time includes waiting for a
+// core, CPU time does not (with one thread it is the cost of the work itself).
+double processCpuMilliseconds() {
+  timespec now{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+  return 1e3 * static_cast<double>(now.tv_sec) + 1e-6 * static_cast<double>(now.tv_nsec);
 }
 
 double medianOf(std::vector<double> values) {
@@ -63,29 +78,96 @@ octomap::Pointcloud worldPoints(const SevenScenesFrame& frame, const CameraIntri
   return cloud;
 }
 
+// The map's occupied voxels seen by a virtual pinhole camera: `view` is the first frame's pose
+// pulled back 1.5 m along its optical axis. Each voxel is a z-buffered square of its projected
+// size, coloured by its height along the view's image-up axis and darkened with distance.
+cv::Mat renderOccupied(const VoxelMap& map, const CameraIntrinsics& camera,
+                       const Eigen::Isometry3d& first_pose) {
+  Eigen::Isometry3d view = first_pose;
+  view.translation() -= 1.5 * first_pose.linear().col(2);
+  const Eigen::Isometry3d T_view_map = view.inverse();
+  std::vector<Eigen::Vector3d> points;
+  map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    if (map.classify(log_odds) == Occupancy::kOccupied) {
+      points.push_back(T_view_map * map.centerOf(index));
+    }
+  });
+  double y_min = std::numeric_limits<double>::infinity(), y_max = -y_min;
+  for (const Eigen::Vector3d& p : points)
+    y_min = std::min(y_min, p.y()), y_max = std::max(y_max, p.y());
+  cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(1e9f));
+  cv::Mat height(camera.height, camera.width, CV_8U, cv::Scalar(0));
+  for (const Eigen::Vector3d& p : points) {
+    if (p.z() <= 0.1) continue;
+    const Eigen::Vector2d uv = camera.project(p);
+    const int half =
+        std::max(1, static_cast<int>(0.5 * camera.fx * map.resolution() / p.z() + 0.5));
+    const int u0 = std::max(0, static_cast<int>(uv.x()) - half);
+    const int u1 = std::min(camera.width - 1, static_cast<int>(uv.x()) + half);
+    const int v0 = std::max(0, static_cast<int>(uv.y()) - half);
+    const int v1 = std::min(camera.height - 1, static_cast<int>(uv.y()) + half);
+    // Image y points down: high voxels (small y) get the high end of the colour map.
+    const auto level =
+        static_cast<std::uint8_t>(255.0 * (y_max - p.y()) / std::max(y_max - y_min, 1e-6));
+    for (int v = v0; v <= v1; ++v) {
+      for (int u = u0; u <= u1; ++u) {
+        if (p.z() < depth.at<float>(v, u)) {
+          depth.at<float>(v, u) = static_cast<float>(p.z());
+          height.at<std::uint8_t>(v, u) = level;
+        }
+      }
+    }
+  }
+  cv::Mat image;
+  cv::applyColorMap(height, image, cv::COLORMAP_JET);
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const float z = depth.at<float>(v, u);
+      cv::Vec3b& pixel = image.at<cv::Vec3b>(v, u);
+      if (z > 1e8f) {
+        pixel = cv::Vec3b(255, 255, 255);
+        continue;
+      }
+      const double shade = std::clamp(1.3 - 0.25 * z, 0.35, 1.0);
+      for (int c = 0; c < 3; ++c) pixel[c] = static_cast<std::uint8_t>(pixel[c] * shade);
+    }
+  }
+  return image;
+}
+
 struct OursResult {
   double median_ms = 0.0;
   double updates_per_second = 0.0;
   double memory_mb = 0.0;
+  double median_cpu_ms = 0.0;
 };
 
+// image_path: when not empty, the final map's occupied voxels are rendered there (PNG).
 OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntrinsics& camera,
-                   const PyramidDepthIntegrator& integrator, double resolution) {
+                   const PyramidDepthIntegrator& integrator, double resolution,
+                   const std::string& image_path) {
   VoxelMapConfig map_config;
   map_config.resolution = resolution;
   VoxelMap map(map_config);
-  std::vector<double> frame_ms;
+  std::vector<double> frame_ms, frame_cpu_ms;
   double total_ms = 0.0;
   std::size_t updates = 0;
   for (const SevenScenesFrame& frame : frames) {
     const auto start = Clock::now();
+    const double cpu_start = processCpuMilliseconds();
     const DepthIntegrationStats stats =
         integrator.integrate(frame.view(camera), camera, frame.T_world_camera, &map);
     frame_ms.push_back(millisecondsSince(start));
+    frame_cpu_ms.push_back(processCpuMilliseconds() - cpu_start);
     total_ms += frame_ms.back();
     updates += stats.voxels_updated;
   }
-  return {medianOf(frame_ms), updates / (total_ms * 1e-3), map.memoryBytes() * 1e-6};
+  if (!image_path.empty() &&
+      !cv::imwrite(image_path, renderOccupied(map, camera, frames.front().T_world_camera))) {
+    throw UsageError("cannot write --image " + image_path);
+  }
+  return {medianOf(frame_ms), updates / (total_ms * 1e-3), map.memoryBytes() * 1e-6,
+          medianOf(frame_cpu_ms)};
 }
 
 // Median milliseconds per insertPointCloud call and the tree's memory.
@@ -116,6 +198,7 @@ int runDepth(const CommandLine& args) {
       parseResolutions(args.value("resolution", "0.02,0.04,0.08,0.16"));
   const int frame_limit = args.intValue("frames", static_cast<int>(folder.size()));
   const int octomap_frames = args.intValue("octomap-frames", 2);
+  const std::string image_path = args.value("image", "");
   if (frame_limit < 1 || octomap_frames < 0) {
     throw UsageError("--frames must be >= 1 and --octomap-frames >= 0");
   }
@@ -152,7 +235,9 @@ int runDepth(const CommandLine& args) {
   std::vector<std::string> summary;
   for (double resolution : resolutions) {
     omp_set_num_threads(threads);  // insertPointCloud may have changed it
-    const OursResult ours = runOurs(frames, camera, integrator, resolution);
+    // The picture shows the first (finest) resolution's map.
+    const OursResult ours = runOurs(frames, camera, integrator, resolution,
+                                    resolution == resolutions.front() ? image_path : "");
     std::pair<double, double> plain{0.0, 0.0}, discretized{0.0, 0.0};
     if (octomap_count > 0) {
       plain = runOctomap(clouds, origins, resolution, false);
@@ -163,11 +248,11 @@ int runDepth(const CommandLine& args) {
                   "depth resolution=%g frames=%zu ms_per_frame=%.2f octomap_ms_per_frame=%.1f "
                   "speedup=%.1f memory_mb=%.1f octomap_discretize_ms_per_frame=%.1f "
                   "speedup_discretize=%.1f octomap_frames=%d octomap_memory_mb=%.1f "
-                  "voxel_updates_per_s=%.3g threads=%d",
+                  "voxel_updates_per_s=%.3g threads=%d cpu_ms_per_frame=%.2f",
                   resolution, frames.size(), ours.median_ms, plain.first,
                   plain.first / ours.median_ms, ours.memory_mb, discretized.first,
                   discretized.first / ours.median_ms, octomap_count, plain.second,
-                  ours.updates_per_second, threads);
+                  ours.updates_per_second, threads, ours.median_cpu_ms);
     std::printf("# %s\n", line);
     std::fflush(stdout);
     summary.push_back(line);
