@@ -129,7 +129,7 @@ cv::Mat plotProfiles(const std::vector<Curve>& curves) {
       points.push_back(to_pixel(profile.distance[i], probability(profile.log_odds[i])));
     }
     cv::polylines(image, points, false, curves[c].color, curves[c].thickness, cv::LINE_AA);
-    const cv::Point legend(width - 250, top + 25 + 25 * static_cast<int>(c));
+    const cv::Point legend(left + 20, top + 25 + 25 * static_cast<int>(c));
     cv::line(image, legend, legend + cv::Point(30, 0), curves[c].color, curves[c].thickness,
              cv::LINE_AA);
     cv::putText(image, curves[c].label, legend + cv::Point(40, 5), font, 0.55, black, 1,

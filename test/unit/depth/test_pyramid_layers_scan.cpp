@@ -1,0 +1,94 @@
+// Eq. 10's layers against an independent cell-by-cell scan of M: an odd-sized image (partial
+// border cells), invalid pixels, and values placed symmetrically about the layers' distances
+// so that different measurements tie and the scan order (rows of a cell top to bottom, each
+// left to right, first one kept) decides.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+
+namespace occupancy_fusion {
+namespace {
+
+struct ScanResult {
+  float kept = std::numeric_limits<float>::quiet_NaN();
+  bool tie = false;  // a later pixel with a different value had the same score
+};
+
+// The measurement a 2^level cell keeps, by visiting its pixels in scan order.
+ScanResult scanCell(const DistancePyramid& pyramid, const CameraIntrinsics& camera, int level,
+                    int cell_u, int cell_v, PyramidSelection selection) {
+  const int side = 1 << level;
+  const float target = static_cast<float>(pyramid.threshold(level));
+  ScanResult result;
+  float best_score = std::numeric_limits<float>::infinity();
+  for (int v = cell_v * side; v < std::min(camera.height, (cell_v + 1) * side); ++v) {
+    for (int u = cell_u * side; u < std::min(camera.width, (cell_u + 1) * side); ++u) {
+      const float value = pyramid.at(0, u, v);
+      if (std::isnan(value)) continue;
+      const float score =
+          selection == PyramidSelection::kMinimum ? value : std::abs(value - target);
+      if (score < best_score) {
+        best_score = score;
+        result.kept = value;
+        result.tie = false;
+      } else if (score == best_score && value != result.kept) {
+        result.tie = true;
+      }
+    }
+  }
+  return result;
+}
+
+bool sameBits(float a, float b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::memcmp(&a, &b, sizeof(float)) == 0;
+}
+
+TEST(DistancePyramid, LayersEqualACellByCellScanIncludingTiesAndBorders) {
+  CameraIntrinsics camera;
+  camera.width = 37;
+  camera.height = 23;
+  camera.fx = camera.fy = 1e6;  // rays all but parallel: M equals the depth
+  camera.cx = 18.0;
+  camera.cy = 11.0;
+  // t_0 = 16: t_i = 16, 8, 4, 2, 1, 0.5; 3 and 5 tie for t = 4, 6 and 10 for t = 8, ...
+  const std::vector<float> values{0.75f, 1.5f, 2.5f, 3.0f, 5.0f, 6.0f, 10.0f, 12.0f, 20.0f};
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(values.size()) + 1);
+  std::vector<float> depth(static_cast<std::size_t>(camera.width) * camera.height);
+  for (float& z : depth) {
+    const int index = pick(random);
+    z = index < static_cast<int>(values.size()) ? values[index] : 0.0f;  // 0: invalid
+  }
+  const DepthImageView view{camera.width, camera.height, depth.data()};
+  for (PyramidSelection selection :
+       {PyramidSelection::kClosestToThreshold, PyramidSelection::kMinimum}) {
+    const DistancePyramid pyramid(view, camera, 16.0, 6, 100.0, selection);
+    ASSERT_EQ(pyramid.levels(), 6);
+    int ties_decided = 0;
+    for (int level = 1; level < pyramid.levels(); ++level) {
+      ASSERT_EQ(pyramid.width(level), (camera.width + (1 << level) - 1) >> level);
+      ASSERT_EQ(pyramid.height(level), (camera.height + (1 << level) - 1) >> level);
+      for (int cv = 0; cv < pyramid.height(level); ++cv) {
+        for (int cu = 0; cu < pyramid.width(level); ++cu) {
+          const ScanResult expected = scanCell(pyramid, camera, level, cu, cv, selection);
+          EXPECT_TRUE(sameBits(pyramid.at(level, cu, cv), expected.kept))
+              << "level " << level << " cell " << cu << "," << cv;
+          ties_decided += expected.tie;
+        }
+      }
+    }
+    if (selection == PyramidSelection::kClosestToThreshold) {
+      EXPECT_GT(ties_decided, 0);  // the image really exercises the tie rule
+    }
+  }
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
