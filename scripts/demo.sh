@@ -14,12 +14,12 @@ mkdir -p "$out"
 echo "[demo] simulating a recording: $out/room.bag"
 "$bin/simulate_recording" --scene room --frames 60 --rate 5 --output "$out/room.bag"
 echo "[demo] mapping it"
-# The simulated cameras are noise-free but for 0.1 px of disparity noise: a narrow depth model
-# (k / (sigma sqrt(2 pi)) < 0.5, Eq. 7) and that disparity sigma suit them at 5 cm.
+# The simulated stereo camera has 0.1 px of disparity noise: the stereo error model (Eq. 7 of
+# the stereo paper) is told so.
 "$bin/offline_mapper" --config "$root/config/point_cloud_mapper.yaml" \
   --config "$root/config/depth_mapper.yaml" --config "$root/config/disparity_mapper.yaml" \
   --config "$root/config/laser_mapper.yaml" --config "$root/config/map_server.yaml" \
-  --set depth/k=0.05 --set depth/sigma=0.05 --set stereo/disparity_sigma_px=0.1 \
+  --set stereo/disparity_sigma_px=0.1 \
   --bag "$out/room.bag" --output-dir "$out" --name room
 echo "[demo] results in $out:"
 ls -1 "$out"
