@@ -6,6 +6,8 @@
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export PATH="/usr/bin:/bin:$PATH"
+# OpenMP threads sleep while they wait: spinning stalls frames when the cores are shared.
+export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
 out="$(realpath -m "${1:-$root/output/demo}")"
 "$root/scripts/install_dependencies.sh"
 "$root/scripts/build.sh"

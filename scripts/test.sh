@@ -4,6 +4,8 @@
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export PATH="/usr/bin:/bin:$PATH"
+# OpenMP threads sleep while they wait: spinning stalls frames when the cores are shared.
+export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
 "$root/scripts/install_dependencies.sh"
 "$root/scripts/build.sh" --tests
 build="$root/build"
