@@ -53,6 +53,8 @@ void readSensorModel(const ParameterSource& source, const std::string& prefix,
               &model->max_log_ratio);
   readChecked(source, prefix, "no_return_free_length", "finite and >= 0 (0: +inf observes nothing)",
               isFiniteNonNegative, &model->no_return_free_length);
+  readChecked(source, prefix, "negligible_log_ratio", "finite and >= 0", isFiniteNonNegative,
+              &model->negligible_log_ratio);
   source.get(prefix + "above_range_max_is_no_return", &model->ranges.above_range_max_is_no_return);
 }
 

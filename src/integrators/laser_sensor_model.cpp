@@ -48,6 +48,21 @@ double clampedLogRatio(long double occ, long double emp, const LaserSensorModelC
   return std::clamp(ratio, c.min_log_ratio, c.max_log_ratio);
 }
 
+// Behind its peak L falls back to the prior (0) but stays positive up to the end of the error
+// window. Summed over many scans, even 1e-6 per scan makes a cell occupied (log-odds > 0), so the
+// trailing cells behind the peak with |L| < negligible carry no information: they are reset to 0
+// and not counted as observed. The peak itself stays, however small (a wide sigma spreads the
+// hit's evidence thin). Returns the number of cells left.
+template <typename T>
+int trimNegligibleTail(T* out, int first, int count, double negligible) {
+  int peak = first;
+  for (int k = first; k < count; ++k) peak = out[k] >= out[peak] ? k : peak;
+  while (count - 1 > peak && std::abs(static_cast<double>(out[count - 1])) < negligible) {
+    out[--count] = static_cast<T>(0);
+  }
+  return count;
+}
+
 // Eq. 3-4 convolved with the error model, written into out[0 .. capacity): returns the number of
 // cells written (last cell of the error window + 1, at most capacity). All terms are scaled by
 // q^-first (a common factor of both likelihoods) and summed in long double with prefix and suffix
@@ -83,7 +98,7 @@ int writeHitLogRatios(double range, const LaserSensorModelConfig& c, T* out, int
     out[first + i] = static_cast<T>(clampedLogRatio(occ, emp, c));
     common += w * p * q_i;
   }
-  return count;
+  return trimNegligibleTail(out, std::min(first, count), count, c.negligible_log_ratio);
 }
 
 }  // namespace
@@ -108,6 +123,11 @@ void LaserSensorModelConfig::validate() const {
     throw std::invalid_argument(
         "LaserSensorModelConfig.no_return_free_length must be finite and >= 0");
   }
+  if (!(std::isfinite(negligible_log_ratio) && negligible_log_ratio >= 0.0 &&
+        negligible_log_ratio < max_log_ratio)) {
+    throw std::invalid_argument(
+        "LaserSensorModelConfig.negligible_log_ratio must be finite, >= 0 and < max_log_ratio");
+  }
   ranges.validate();
 }
 
@@ -117,7 +137,8 @@ BeamLogRatios hitLogRatios(double range, const LaserSensorModelConfig& c) {
   errorWindow(range, c, &first, &last);
   BeamLogRatios out;
   out.log_ratio.resize(static_cast<std::size_t>(last) + 1);
-  writeHitLogRatios(range, c, out.log_ratio.data(), last + 1);
+  const int count = writeHitLogRatios(range, c, out.log_ratio.data(), last + 1);
+  out.log_ratio.resize(static_cast<std::size_t>(count));
   return out;
 }
 

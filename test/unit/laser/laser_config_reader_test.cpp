@@ -58,6 +58,7 @@ TEST(LaserConfigReader, SourcesOverrideTheSharedBlockWhichOverridesTheDefaults) 
                           {"rear/sensor_frame", std::string("rear_laser")},
                           {"rear/range_sigma", 0.02},
                           {"rear/prior", 0.3},
+                          {"rear/negligible_log_ratio", 0.01},
                           {"rear/above_range_max_is_no_return", true},
                           {"local_grid/size_x", 12.0},
                           {"local_grid/frame_id", std::string("chassis")}});
@@ -78,6 +79,9 @@ TEST(LaserConfigReader, SourcesOverrideTheSharedBlockWhichOverridesTheDefaults) 
   EXPECT_EQ(rear.integrator.method, PolarToCartesianMethod::kExact);
   EXPECT_DOUBLE_EQ(rear.integrator.model.range_sigma, 0.02);
   EXPECT_DOUBLE_EQ(rear.integrator.model.prior_occupancy, 0.3);
+  EXPECT_DOUBLE_EQ(rear.integrator.model.negligible_log_ratio, 0.01);
+  EXPECT_DOUBLE_EQ(front.integrator.model.negligible_log_ratio,
+                   LaserSensorModelConfig().negligible_log_ratio);
   EXPECT_TRUE(rear.integrator.model.ranges.above_range_max_is_no_return);
   EXPECT_DOUBLE_EQ(config.local_grid.grid.size_x, 12.0);
   EXPECT_DOUBLE_EQ(config.local_grid.grid.size_y, LocalLaserGridConfig().size_y);

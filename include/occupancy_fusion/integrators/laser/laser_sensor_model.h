@@ -34,10 +34,16 @@ namespace occupancy_fusion {
 // Values. Cells in front of the error window have p(r | occ) = 0 (the beam
 // would have stopped there): L = -inf, clamped to min_log_ratio. Inside the
 // window L rises through 0 to a positive peak near r (about +0.3 for sigma =
-// d_rho, p = 1/2; larger for smaller sigma or p), clamped to max_log_ratio.
-// Behind the window both likelihoods are equal, L = 0: those cells are not
-// observed and are left out (unknown), not written as 0. So every value lies in
-// [min_log_ratio, max_log_ratio].
+// d_rho, p = 1/2; larger for smaller sigma or p), clamped to max_log_ratio,
+// then falls back to 0 (the prior) behind r: about +0.07, +0.006, +2e-4, ... per
+// cell for sigma = d_rho. Behind the window both likelihoods are equal, L = 0.
+// The trailing cells behind the peak with |L| < negligible_log_ratio (default
+// 0.05, a probability within 0.0125 of 1/2) are "no information": not
+// observed, left unknown, not written as 0. Kept, their tiny positive values
+// would add up over many scans to an occupied band up to 6 sigma behind every
+// surface. So every value lies in [min_log_ratio, max_log_ratio], and a hit
+// beam's last observed cell is its peak or a later cell with |L| >=
+// negligible_log_ratio (for sigma = d_rho: at most 2 sigma behind r).
 //
 // No return (+inf, REP-117): no detection within range_max has likelihood 0 for
 // an occupied cell, so cells up to no_return_free_length get min_log_ratio;
@@ -49,6 +55,7 @@ struct LaserSensorModelConfig {
   double min_log_ratio = -2.0;         // lower clamp of L (free evidence per scan)
   double max_log_ratio = 3.5;          // upper clamp of L (occupied evidence per scan)
   double no_return_free_length = 0.0;  // m: free length of a +inf beam; 0 = observes nothing
+  double negligible_log_ratio = 0.05;  // trailing cells of a hit with |L| below: unobserved
   LaserRangeConfig ranges;             // how out-of-limits finite readings are read
 
   void validate() const;  // throws std::invalid_argument naming the bad field
