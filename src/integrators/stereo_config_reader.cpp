@@ -55,6 +55,7 @@ VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source)
   read(source, "max_range", &config.max_range);
   read(source, "disparity_sigma_px", &config.disparity.disparity_sigma_px);
   read(source, "min_disparity_px", &config.disparity.min_disparity_px);
+  read(source, "max_depth_sigma_ratio", &config.disparity.max_depth_sigma_ratio);
   readEnum(source, "input_resolution", inputResolutionFromString,
            &config.disparity.input_resolution);
   try {

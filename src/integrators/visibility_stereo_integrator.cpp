@@ -535,7 +535,8 @@ void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& 
                                                       const Eigen::Isometry3d& T_map_camera,
                                                       std::vector<Eigen::Vector3f>* points_in_map,
                                                       std::vector<float>* range_sigmas,
-                                                      std::size_t* pixels_read) const {
+                                                      std::size_t* pixels_read,
+                                                      std::size_t* dropped_uncertain) const {
   const StereoPoints camera_points = disparityToPoints(disparity, camera, config_.disparity);
   const Eigen::Isometry3f transform = T_map_camera.cast<float>();
   points_in_map->resize(camera_points.size());
@@ -547,6 +548,7 @@ void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& 
     (*range_sigmas)[i] = camera_points.depth_sigmas[i] * p.norm() / p.z();
   }
   if (pixels_read != nullptr) *pixels_read = camera_points.pixels_read;
+  if (dropped_uncertain != nullptr) *dropped_uncertain = camera_points.dropped_uncertain;
 }
 
 StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImageView& disparity,
@@ -556,8 +558,11 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
   const auto start = std::chrono::steady_clock::now();
   std::vector<Eigen::Vector3f> points;
   std::vector<float> sigmas;
-  disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr);
+  std::size_t dropped_uncertain = 0;
+  disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr,
+                       &dropped_uncertain);
   StereoIntegrationStats stats = integrate(points, sigmas, T_map_camera.translation(), map);
+  stats.dropped_uncertain = dropped_uncertain;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }

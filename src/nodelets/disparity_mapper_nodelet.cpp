@@ -127,6 +127,7 @@ class DisparityMapper : public nodelet::Nodelet {
     last_stats_ = integrator_->integrate(view, camera, T_map_camera, &map_->voxels());
     ++integrated_images_;
     skipped_points_ += last_stats_.skipped_points;
+    dropped_uncertain_points_ += last_stats_.dropped_uncertain;
     NODELET_DEBUG("integrated %zu points (%zu skipped) in %.1f ms, cache hit rate %.2f",
                   last_stats_.points, last_stats_.skipped_points, last_stats_.milliseconds(),
                   last_stats_.cacheHitRate());
@@ -144,6 +145,8 @@ class DisparityMapper : public nodelet::Nodelet {
     status.add("images dropped (no camera_info)", dropped_no_camera_info_.load());
     status.add("images dropped (no transform)", dropped_no_transform_.load());
     status.add("points skipped", skipped_points_.load());
+    status.add("points dropped (sigma_z / z over max_depth_sigma_ratio)",
+               dropped_uncertain_points_.load());
     status.add("last image points", last_stats_.points);
     status.add("last image rays stopped invisible", last_stats_.rays_invisible);
     status.add("last image voxels updated", last_stats_.updated_voxels);
@@ -170,6 +173,7 @@ class DisparityMapper : public nodelet::Nodelet {
   std::atomic<std::size_t> dropped_no_camera_info_{0};
   std::atomic<std::size_t> dropped_no_transform_{0};
   std::atomic<std::size_t> skipped_points_{0};
+  std::atomic<std::size_t> dropped_uncertain_points_{0};
   StereoIntegrationStats last_stats_;
 };
 

@@ -59,6 +59,9 @@ void DisparityConversionConfig::validate() const {
     throw std::invalid_argument(
         "DisparityConversionConfig.min_disparity_px must be finite and >= 0");
   }
+  if (std::isnan(max_depth_sigma_ratio)) {
+    throw std::invalid_argument("DisparityConversionConfig.max_depth_sigma_ratio must not be NaN");
+  }
   const int step = pixelStep(input_resolution);
   if (step != 1 && step != 2 && step != 4) {
     throw std::invalid_argument(
@@ -75,6 +78,7 @@ StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCame
   const int step = pixelStep(config.input_resolution);
   const double focal_baseline = camera.fx * camera.baseline;
   const double lambda = depthErrorFactor(config.disparity_sigma_px, camera.baseline, camera.fx);
+  const double max_ratio = config.max_depth_sigma_ratio;
   StereoPoints result;
   const std::size_t expected = static_cast<std::size_t>((image.width + step - 1) / step) *
                                ((image.height + step - 1) / step);
@@ -87,9 +91,14 @@ StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCame
       const float d = image.at(u, v);
       if (!(std::isfinite(d) && d > 0 && d >= config.min_disparity_px)) continue;
       const double z = focal_baseline / d;
+      const double sigma_z = depthSigma(z, lambda);
+      if (max_ratio >= 0 && sigma_z > max_ratio * z) {
+        ++result.dropped_uncertain;
+        continue;
+      }
       result.points.emplace_back(static_cast<float>(z * (u - camera.cx) / camera.fx),
                                  static_cast<float>(z * ray_y), static_cast<float>(z));
-      result.depth_sigmas.push_back(static_cast<float>(depthSigma(z, lambda)));
+      result.depth_sigmas.push_back(static_cast<float>(sigma_z));
     }
   }
   return result;

@@ -124,6 +124,9 @@ struct StereoVoxelUpdate {
 struct StereoIntegrationStats {
   std::size_t points = 0;          // points given (after the disparity conversion)
   std::size_t skipped_points = 0;  // non-finite, or outside the key range of the map
+  // integrate(disparity image) only: valid disparities dropped before ray casting because their
+  // sigma_z / z exceeds disparity.max_depth_sigma_ratio (not counted in points)
+  std::size_t dropped_uncertain = 0;
   std::size_t rays = 0;            // rays cast
   std::size_t rays_invisible = 0;  // rays stopped early because P(V) fell below q_min
   std::size_t voxel_visits = 0;    // voxels walked over all rays
@@ -167,11 +170,13 @@ class VisibilityStereoIntegrator {
   // The writing half: one VoxelMap::updateBlocks call.
   void apply(const std::vector<StereoVoxelUpdate>& updates, VoxelMap* map) const;
 
-  // Points of a disparity image in the map frame with their range sigmas.
+  // Points of a disparity image in the map frame with their range sigmas; optionally the pixels
+  // read and the valid disparities dropped for sigma_z / z > disparity.max_depth_sigma_ratio.
   void disparityToMapPoints(const DisparityImageView& disparity, const StereoCamera& camera,
                             const Eigen::Isometry3d& T_map_camera,
                             std::vector<Eigen::Vector3f>* points_in_map,
-                            std::vector<float>* range_sigmas, std::size_t* pixels_read) const;
+                            std::vector<float>* range_sigmas, std::size_t* pixels_read,
+                            std::size_t* dropped_uncertain = nullptr) const;
 
  private:
   VisibilityStereoConfig config_;

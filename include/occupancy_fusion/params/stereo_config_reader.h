@@ -30,6 +30,7 @@ inline const std::string kStereoParameterPrefix = "stereo/";
 //   max_range                       m, negative = unlimited
 //   disparity_sigma_px              px, sigma_d of Eq. 7
 //   min_disparity_px                px, smaller disparities are dropped
+//   max_depth_sigma_ratio           points with a larger sigma_z / z (Eq. 7) are dropped
 //   input_resolution                full | half | quarter
 // Validates the result; throws std::invalid_argument whose message names the offending
 // parameter (e.g. "stereo/visibility_min ...").

@@ -57,6 +57,14 @@ struct DisparityConversionConfig {
   // px; smaller disparities (farther points) are dropped. 0 keeps every
   // positive disparity.
   double min_disparity_px = 0.0;
+  // Points whose relative depth error sigma_z / z (Eq. 7: = lambda z = sigma_d / d) exceeds it are
+  // dropped; negative: none. Equivalently, disparities below disparity_sigma_px / ratio. A
+  // disparity near 0 (a match lost in noise) gives a point kilometres away whose sigma_z exceeds
+  // its depth: Eq. 8 then gives every voxel of its ray P(I_v) near 0.5, and since a voxel keeps the
+  // largest P(I_v) of its rays, the voxels next to the sensor are never cleared. A kept point's
+  // P(I_v) at distance s in front of the sensor is at most Phi(-(1 - s / z) / ratio): at 0.5,
+  // Phi(-2) = 0.023 at the sensor and 0.16 at half its depth, still a net miss in Eq. 8.
+  double max_depth_sigma_ratio = 0.5;
   InputResolution input_resolution = InputResolution::kFull;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
@@ -78,13 +86,15 @@ struct StereoPoints {
   std::vector<Eigen::Vector3f> points;
   std::vector<float> depth_sigmas;  // m, sigma_z of points[i]
   std::size_t pixels_read = 0;      // pixels looked at (after sub-sampling)
+  std::size_t dropped_uncertain =
+      0;  // valid disparities dropped: sigma_z / z > max_depth_sigma_ratio
 
   std::size_t size() const { return points.size(); }
 };
 
-// Converts the valid pixels (finite d > max(0, min_disparity_px)) at the
-// configured input resolution: pixel (u, v) with depth z gives z * ((u - cx) /
-// fx, (v - cy) / fy, 1).
+// Converts the valid pixels (finite d > max(0, min_disparity_px)) whose sigma_z / z is within
+// max_depth_sigma_ratio at the configured input resolution: pixel (u, v) with depth z gives z * ((u
+// - cx) / fx, (v - cy) / fy, 1).
 StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCamera& camera,
                                const DisparityConversionConfig& config);
 

@@ -75,6 +75,29 @@ TEST(DisparityPointsTest, RowStrideAndMinimumDisparity) {
   EXPECT_NEAR(points.points[2].z(), 10.0 / 40.0, 1e-6);
 }
 
+TEST(DisparityPointsTest, PointsWithALargeRelativeDepthErrorAreDroppedAndCounted) {
+  // f * b = 10 m px, sigma_d = 0.5 px: sigma_z / z = sigma_d / d.
+  const std::vector<float> disparity = {10, 0.9f, 0.001f, 1.1f};  // ratios 0.05, 0.56, 500, 0.45
+  const DisparityImageView view{4, 1, disparity.data(), 0};
+  const StereoCamera camera{100.0, 100.0, 1.5, 0.0, 0.1};
+  DisparityConversionConfig config;
+  EXPECT_DOUBLE_EQ(config.max_depth_sigma_ratio, 0.5);  // the default drops d < 1 px
+  const StereoPoints capped = disparityToPoints(view, camera, config);
+  ASSERT_EQ(capped.size(), 2u);
+  EXPECT_EQ(capped.dropped_uncertain, 2u);
+  EXPECT_NEAR(capped.points[1].z(), 10.0 / 1.1, 1e-5);
+  EXPECT_NEAR(capped.depth_sigmas[1], 0.05 * (10.0 / 1.1) * (10.0 / 1.1), 1e-5);
+  config.max_depth_sigma_ratio = 0.6;  // keeps d = 0.9 px
+  EXPECT_EQ(disparityToPoints(view, camera, config).size(), 3u);
+  config.max_depth_sigma_ratio = -1.0;  // none
+  const StereoPoints all = disparityToPoints(view, camera, config);
+  EXPECT_EQ(all.size(), 4u);
+  EXPECT_EQ(all.dropped_uncertain, 0u);
+  EXPECT_NEAR(all.depth_sigmas[2], 0.05 * 1e4 * 1e4, 100.0);
+  config.max_depth_sigma_ratio = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+}
+
 TEST(DisparityPointsTest, ValidationNamesTheField) {
   DisparityConversionConfig config;
   config.disparity_sigma_px = -1;

@@ -96,6 +96,7 @@ TEST(StereoConfigReader, ReadsEveryField) {
       {"stereo/max_range", "7.5"},
       {"stereo/disparity_sigma_px", "0.25"},
       {"stereo/min_disparity_px", "2"},
+      {"stereo/max_depth_sigma_ratio", "0.4"},
       {"stereo/input_resolution", "quarter"},
   });
   EXPECT_EQ(config.method, StereoIntegrationMethod::kOctomap);
@@ -112,6 +113,7 @@ TEST(StereoConfigReader, ReadsEveryField) {
   EXPECT_DOUBLE_EQ(config.max_range, 7.5);
   EXPECT_DOUBLE_EQ(config.disparity.disparity_sigma_px, 0.25);
   EXPECT_DOUBLE_EQ(config.disparity.min_disparity_px, 2.0);
+  EXPECT_DOUBLE_EQ(config.disparity.max_depth_sigma_ratio, 0.4);
   EXPECT_EQ(config.disparity.input_resolution, InputResolution::kQuarter);
 }
 
@@ -135,6 +137,10 @@ TEST(StereoConfigReader, ErrorsNameTheParameter) {
   EXPECT_NE(messageOf([] {
               readFrom({{"stereo/disparity_sigma_px", "-1"}});
             }).find("stereo/disparity_sigma_px"),
+            std::string::npos);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/max_depth_sigma_ratio", "nan"}});
+            }).find("stereo/max_depth_sigma_ratio"),
             std::string::npos);
   EXPECT_NE(messageOf([] {
               readFrom({{"stereo/max_range", "far"}});
@@ -163,6 +169,7 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
                                           "max_range",
                                           "disparity_sigma_px",
                                           "min_disparity_px",
+                                          "max_depth_sigma_ratio",
                                           "input_resolution"};
   std::size_t stereo_keys = 0;
   for (const auto& [key, value] : values) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <random>
 #include <stdexcept>
 #include <tuple>
@@ -414,6 +415,64 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointForm) {
   from_points.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
     EXPECT_EQ(from_image.logOdds(index), std::optional<float>(value));
   });
+}
+
+// A near-zero disparity among good ones (a match lost in noise): z = 20 km with sigma_z = 1e7 m,
+// so Eq. 8 gives every voxel of its ray P(I) ~ 0.5, and the largest P(I) of a frame's rays wins.
+// With max_depth_sigma_ratio (sigma_z / z = 2e4 / 20 = 500 here) the point is dropped and the map
+// is exactly the good pixels' map.
+TEST(VisibilityStereoIntegratorTest, NearZeroDisparityLeavesTheVoxelsNearTheSensorFree) {
+  const float kNearZero = 0.001f;
+  const std::vector<float> with_bad = {20.0f, kNearZero, 20.0f};  // f * b = 20: z = 1 m
+  const std::vector<float> good_only = {20.0f, std::nanf(""), 20.0f};
+  const StereoCamera camera{100.0, 100.0, 1.0, 0.0, 0.2};
+  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
+  T_map_camera.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;  // optical z -> map x
+  T_map_camera.translation() = kOrigin;
+  auto mapAfterFrames = [&](const std::vector<float>& pixels, double max_ratio, int frames,
+                            std::size_t* dropped) {
+    VisibilityStereoConfig config;
+    config.disparity.max_depth_sigma_ratio = max_ratio;
+    const VisibilityStereoIntegrator integrator(config);
+    auto map = std::make_unique<VoxelMap>(mapConfig());
+    fillFreeCorridor(false, map.get());
+    for (int i = 0; i < frames; ++i) {
+      const StereoIntegrationStats stats = integrator.integrate(
+          DisparityImageView{3, 1, pixels.data(), 0}, camera, T_map_camera, map.get());
+      *dropped = stats.dropped_uncertain;
+    }
+    return map;
+  };
+  std::size_t dropped = 0;
+  const auto reference = mapAfterFrames(good_only, 0.5, 1, &dropped);
+  EXPECT_EQ(dropped, 0u);
+  const auto capped = mapAfterFrames(with_bad, 0.5, 1, &dropped);
+  EXPECT_EQ(dropped, 1u);
+  EXPECT_EQ(capped->knownVoxelCount(), reference->knownVoxelCount());
+  reference->forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    EXPECT_EQ(capped->logOdds(index), std::optional<float>(value));
+  });
+  // Voxels 0..9 lie before the good points (voxel 9's centre 4 sigma_z in front, P(I) = 3e-5):
+  // visible misses from 0.3, 0.135 / 0.534.
+  for (int k = 0; k <= 9; ++k) EXPECT_NEAR(probabilityAt(*capped, k), 0.135 / 0.534, 1e-5) << k;
+
+  // Without the cap the bad ray's P(I) ~ 0.5 overrides the good rays' misses: one frame raises
+  // the voxels next to the sensor above their prior 0.3 (half a hit, half a miss of Eq. 8), ...
+  const auto uncapped = mapAfterFrames(with_bad, -1.0, 1, &dropped);
+  EXPECT_EQ(dropped, 0u);
+  const double p_inside = 0.5;  // Phi(-2e4 / 1e7) = 0.4992
+  const double expected = occupancyAfterInterpolatedMeasurement(0.3, p_inside, 1.0, kTableI);
+  for (int k = 0; k <= 9; ++k) EXPECT_NEAR(probabilityAt(*uncapped, k), expected, 2e-3) << k;
+  EXPECT_GT(expected, 0.3);
+  // ... and repeated frames hold them at Eq. 8's fixed point for P(I) = 0.5 (0.363, three times
+  // the clamp) instead of clearing them, while the capped map clamps them free.
+  const auto uncapped_many = mapAfterFrames(with_bad, -1.0, 20, &dropped);
+  const auto capped_many = mapAfterFrames(with_bad, 0.5, 20, &dropped);
+  const double clamp_min = probabilityFromLogOdds(capped_many->minLogOdds());
+  for (int k = 0; k <= 9; ++k) {
+    EXPECT_NEAR(probabilityAt(*capped_many, k), clamp_min, 1e-6) << k;
+    EXPECT_GT(probabilityAt(*uncapped_many, k), 0.35) << k;
+  }
 }
 
 }  // namespace
