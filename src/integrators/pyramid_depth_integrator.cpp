@@ -33,7 +33,133 @@ int bracketingLevel(const DistancePyramid& pyramid, double distance) {
   return level;
 }
 
+// Layers 1 .. kScannedLevels - 1 (cells of 2 x 2 and 4 x 4 pixels) are scanned from M directly;
+// the coarser ones are merged level by level from per-cell distance buckets (see
+// DistanceBuckets), which costs one pass over M for all of them.
+constexpr int kScannedLevels = 3;
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
 }  // namespace
+
+// The two largest and two smallest distinct distances of a cell that fall into one bucket.
+struct BucketExtremes {
+  float max1 = -kInfinity, max2 = -kInfinity;
+  float min1 = kInfinity, min2 = kInfinity;
+
+  bool empty() const { return max1 == -kInfinity; }
+  void addMax(float x) {
+    if (x > max1) {
+      max2 = max1;
+      max1 = x;
+    } else if (x < max1 && x > max2) {
+      max2 = x;
+    }
+  }
+  void addMin(float x) {
+    if (x < min1) {
+      min2 = min1;
+      min1 = x;
+    } else if (x > min1 && x < min2) {
+      min2 = x;
+    }
+  }
+  void add(float x) {
+    addMax(x);
+    addMin(x);
+  }
+  void merge(const BucketExtremes& other) {
+    addMax(other.max1);
+    addMax(other.max2);
+    addMin(other.min1);
+    addMin(other.min2);
+  }
+};
+
+// Eq. 10 for all coarse layers at once. "Closest to t_j" is the largest distance <= t_j or the
+// smallest >= t_j, and both compose over sub-blocks by max / min. The thresholds t_0 > ... >
+// t_{L-1} cut the distances into L + 1 buckets (bucket k: t_k <= d < t_{k-1}); a cell keeps,
+// per bucket, its two largest and two smallest distinct distances, which merge over 2 x 2
+// children exactly. The second values decide whether the float score |d - t_j| of the winner is
+// shared by another distance of the cell (rounding, or one on each side of t_j): the scan would
+// then keep the first such pixel in its order, so such a cell is scanned instead.
+class DistanceBuckets {
+ public:
+  explicit DistanceBuckets(const std::vector<float>& thresholds)
+      : thresholds_(thresholds), buckets_(static_cast<int>(thresholds.size()) + 1) {}
+
+  void resize(int width, int height) {
+    width_ = width;
+    height_ = height;
+    cells_.assign(static_cast<std::size_t>(width) * height * buckets_, BucketExtremes());
+  }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  BucketExtremes* cell(int u, int v) {
+    return &cells_[(static_cast<std::size_t>(v) * width_ + u) * buckets_];
+  }
+  const BucketExtremes* cell(int u, int v) const {
+    return &cells_[(static_cast<std::size_t>(v) * width_ + u) * buckets_];
+  }
+  int bucketOf(float distance) const {
+    int bucket = 0;
+    for (float threshold : thresholds_) bucket += threshold > distance;
+    return bucket;
+  }
+  void mergeCell(const BucketExtremes* child, BucketExtremes* parent) const {
+    for (int k = 0; k < buckets_; ++k) parent[k].merge(child[k]);
+  }
+  // The distance of the cell closest to t_level as the scan keeps it (NaN: no valid one);
+  // false when another distance of the cell has the same score, i.e. the scan order decides.
+  bool closest(const BucketExtremes* cell, int level, float* kept) const;
+
+ private:
+  std::vector<float> thresholds_;
+  int buckets_;
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<BucketExtremes> cells_;
+};
+
+bool DistanceBuckets::closest(const BucketExtremes* cell, int level, float* kept) const {
+  const float target = thresholds_[static_cast<std::size_t>(level)];
+  if (cell[level].min1 == target) {  // score 0, and only t_level itself scores 0
+    *kept = target;
+    return true;
+  }
+  // Below t_level: buckets level + 1 ... L; at or above: buckets level ... 0.
+  float below = -kInfinity, below_next = -kInfinity;
+  for (int k = level + 1; k < buckets_ && below_next == -kInfinity; ++k) {
+    if (cell[k].empty()) continue;
+    if (below == -kInfinity) {
+      below = cell[k].max1;
+      below_next = cell[k].max2;
+    } else {
+      below_next = cell[k].max1;
+    }
+  }
+  float above = kInfinity, above_next = kInfinity;
+  for (int k = level; k >= 0 && above_next == kInfinity; --k) {
+    if (cell[k].empty()) continue;
+    if (above == kInfinity) {
+      above = cell[k].min1;
+      above_next = cell[k].min2;
+    } else {
+      above_next = cell[k].min1;
+    }
+  }
+  const float below_score = std::abs(below - target);  // the scan's score, same float steps
+  const float above_score = std::abs(above - target);
+  if (below == -kInfinity && above == kInfinity) {
+    *kept = kNaN;
+    return true;
+  }
+  if (below_score == above_score) return false;
+  const bool take_below = below_score < above_score;
+  const float winner = take_below ? below : above;
+  const float runner_up = take_below ? below_next : above_next;
+  *kept = winner;
+  return std::abs(runner_up - target) != std::abs(winner - target);
+}
 
 // ---------------------------------------------------------------------------------------------
 // Configuration and Eq. 7
@@ -154,10 +280,11 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
           static_cast<float>(measured);
     }
   }
-  // Every layer reads all of M, so each is the same work: one layer per thread at a time.
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int level = 1; level < static_cast<int>(layers_.size()); ++level) {
-    buildLayer(level, selection);
+  for (int level = 1; level < this->levels(); ++level) sizeLayer(level);
+  if (selection == PyramidSelection::kMinimum) {
+    buildMinimumLayers();
+  } else {
+    buildClosestLayers();
   }
 }
 
@@ -172,23 +299,149 @@ int DistancePyramid::levelCount(const CameraIntrinsics& camera, double t0, doubl
   return levels;
 }
 
-void DistancePyramid::buildLayer(int level, PyramidSelection selection) {
-  // Eq. 10 reads the full-resolution M, not the layer below: the measurement closest to t_i
-  // need not have been kept for t_{i-1}.
+void DistancePyramid::sizeLayer(int level) {
   const Layer& full = layers_[0];
   Layer& layer = layers_[level];
   const int side = 1 << level;
   layer.width = (full.width + side - 1) / side;
   layer.height = (full.height + side - 1) / side;
   layer.cells.assign(static_cast<std::size_t>(layer.width) * layer.height, kNaN);
-  const float target = static_cast<float>(threshold(level));
-  if (selection == PyramidSelection::kMinimum) {
-    fillLayer(
-        full, level, [](float value) { return value; }, &layer);
-  } else {
-    fillLayer(
-        full, level, [target](float value) { return std::abs(value - target); }, &layer);
+}
+
+void DistancePyramid::buildMinimumLayers() {
+  // The minimum of a block is the minimum of its 2 x 2 sub-blocks' minima (equal values are
+  // the same value, so which pixel a scan would keep does not matter).
+  for (int level = 1; level < levels(); ++level) {
+    const Layer& finer = layers_[level - 1];
+    Layer& layer = layers_[level];
+#pragma omp parallel for schedule(static)
+    for (int v = 0; v < layer.height; ++v) {
+      for (int u = 0; u < layer.width; ++u) {
+        float best = kInfinity;
+        for (int child_v = 2 * v; child_v < std::min(finer.height, 2 * v + 2); ++child_v) {
+          for (int child_u = 2 * u; child_u < std::min(finer.width, 2 * u + 2); ++child_u) {
+            const float value =
+                finer.cells[static_cast<std::size_t>(child_v) * finer.width + child_u];
+            if (value < best) best = value;  // NaN never compares smaller
+          }
+        }
+        if (best < kInfinity) layer.cells[static_cast<std::size_t>(v) * layer.width + u] = best;
+      }
+    }
   }
+}
+
+void DistancePyramid::buildClosestLayers() {
+  // The fine layers have few pixels per cell: scanning M is cheaper than bucket bookkeeping.
+  const int scanned = std::min(kScannedLevels, levels());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int level = 1; level < scanned; ++level) {
+    const float target = static_cast<float>(threshold(level));
+    fillLayer(
+        layers_[0], level, [target](float value) { return std::abs(value - target); },
+        &layers_[level]);
+  }
+  if (levels() <= kScannedLevels) return;
+  std::vector<float> targets(static_cast<std::size_t>(levels()));
+  for (int level = 0; level < levels(); ++level) {
+    targets[level] = static_cast<float>(threshold(level));
+  }
+  DistanceBuckets coarse(targets), finer(targets);
+  fillBuckets(kScannedLevels, &coarse);
+  takeClosest(coarse, kScannedLevels);
+  for (int level = kScannedLevels + 1; level < levels(); ++level) {
+    std::swap(coarse, finer);
+    coarse.resize(layers_[level].width, layers_[level].height);
+#pragma omp parallel for schedule(static)
+    for (int v = 0; v < coarse.height(); ++v) {
+      for (int u = 0; u < coarse.width(); ++u) {
+        for (int child_v = 2 * v; child_v < std::min(finer.height(), 2 * v + 2); ++child_v) {
+          for (int child_u = 2 * u; child_u < std::min(finer.width(), 2 * u + 2); ++child_u) {
+            finer.mergeCell(finer.cell(child_u, child_v), coarse.cell(u, v));
+          }
+        }
+      }
+    }
+    takeClosest(coarse, level);
+  }
+}
+
+void DistancePyramid::fillBuckets(int level, DistanceBuckets* buckets) const {
+  const Layer& full = layers_[0];
+  buckets->resize(layers_[level].width, layers_[level].height);
+  const int side = 1 << level;
+#pragma omp parallel for schedule(static)
+  for (int cell_v = 0; cell_v < buckets->height(); ++cell_v) {
+    const int v_begin = cell_v * side;
+    const int v_end = std::min(full.height, v_begin + side);
+    for (int cell_u = 0; cell_u < buckets->width(); ++cell_u) {
+      const int u_begin = cell_u * side;
+      const int u_end = std::min(full.width, u_begin + side);
+      // Most cells lie within one bucket: then its extremes are the cell's, found with
+      // branch-free min / max passes (NaN never compares, so invalid pixels drop out).
+      float low = kInfinity, high = -kInfinity;
+      for (int v = v_begin; v < v_end; ++v) {
+        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+        for (int u = u_begin; u < u_end; ++u) {
+          low = row[u] < low ? row[u] : low;
+          high = row[u] > high ? row[u] : high;
+        }
+      }
+      if (high == -kInfinity) continue;  // no valid pixel
+      BucketExtremes* cell = buckets->cell(cell_u, cell_v);
+      const int bucket = buckets->bucketOf(low);
+      if (bucket == buckets->bucketOf(high)) {
+        float low_next = kInfinity, high_next = -kInfinity;
+        for (int v = v_begin; v < v_end; ++v) {
+          const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+          for (int u = u_begin; u < u_end; ++u) {
+            low_next = row[u] > low && row[u] < low_next ? row[u] : low_next;
+            high_next = row[u] < high && row[u] > high_next ? row[u] : high_next;
+          }
+        }
+        cell[bucket] = {high, high_next, low, low_next};
+        continue;
+      }
+      for (int v = v_begin; v < v_end; ++v) {
+        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+        for (int u = u_begin; u < u_end; ++u) {
+          if (!std::isnan(row[u])) cell[buckets->bucketOf(row[u])].add(row[u]);
+        }
+      }
+    }
+  }
+}
+
+void DistancePyramid::takeClosest(const DistanceBuckets& buckets, int level) {
+  Layer& layer = layers_[level];
+  const float target = static_cast<float>(threshold(level));
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int v = 0; v < layer.height; ++v) {
+    for (int u = 0; u < layer.width; ++u) {
+      float& kept = layer.cells[static_cast<std::size_t>(v) * layer.width + u];
+      if (!buckets.closest(buckets.cell(u, v), level, &kept)) {
+        kept = scanCell(level, u, v, target);  // a tie: the scan order decides
+      }
+    }
+  }
+}
+
+float DistancePyramid::scanCell(int level, int cell_u, int cell_v, float target) const {
+  const Layer& full = layers_[0];
+  const int side = 1 << level;
+  float best_score = kInfinity;
+  float kept = kNaN;
+  for (int v = cell_v * side; v < std::min(full.height, (cell_v + 1) * side); ++v) {
+    for (int u = cell_u * side; u < std::min(full.width, (cell_u + 1) * side); ++u) {
+      const float value = full.cells[static_cast<std::size_t>(v) * full.width + u];
+      const float candidate = std::abs(value - target);
+      if (candidate < best_score) {
+        best_score = candidate;
+        kept = value;
+      }
+    }
+  }
+  return kept;
 }
 
 template <class Score>

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <limits>
 #include <sstream>
@@ -135,11 +136,29 @@ cv::Mat renderOccupied(const VoxelMap& map, const CameraIntrinsics& camera,
   return image;
 }
 
+// A sum over voxels of a mixed hash of (index, log-odds bits): equal for bit-identical maps
+// whatever the iteration order, so code changes that must not change results can be checked.
+std::uint64_t mapHash(const VoxelMap& map) {
+  std::uint64_t sum = 0;
+  map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &log_odds, sizeof(bits));
+    std::uint64_t h = bits;
+    for (int axis = 0; axis < 3; ++axis) {
+      h = (h ^ static_cast<std::uint32_t>(index[axis])) * 0x9E3779B97F4A7C15ULL;
+      h ^= h >> 29;
+    }
+    sum += h;
+  });
+  return sum;
+}
+
 struct OursResult {
   double median_ms = 0.0;
   double updates_per_second = 0.0;
   double memory_mb = 0.0;
   double median_cpu_ms = 0.0;
+  std::uint64_t map_hash = 0;  // of every voxel's index and log-odds bits, order-free
 };
 
 // image_path: when not empty, the final map's occupied voxels are rendered there (PNG).
@@ -167,7 +186,7 @@ OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntr
     throw UsageError("cannot write --image " + image_path);
   }
   return {medianOf(frame_ms), updates / (total_ms * 1e-3), map.memoryBytes() * 1e-6,
-          medianOf(frame_cpu_ms)};
+          medianOf(frame_cpu_ms), mapHash(map)};
 }
 
 // Median milliseconds per insertPointCloud call and the tree's memory.
@@ -248,11 +267,12 @@ int runDepth(const CommandLine& args) {
                   "depth resolution=%g frames=%zu ms_per_frame=%.2f octomap_ms_per_frame=%.1f "
                   "speedup=%.1f memory_mb=%.1f octomap_discretize_ms_per_frame=%.1f "
                   "speedup_discretize=%.1f octomap_frames=%d octomap_memory_mb=%.1f "
-                  "voxel_updates_per_s=%.3g threads=%d cpu_ms_per_frame=%.2f",
+                  "voxel_updates_per_s=%.3g threads=%d cpu_ms_per_frame=%.2f map_hash=%016llx",
                   resolution, frames.size(), ours.median_ms, plain.first,
                   plain.first / ours.median_ms, ours.memory_mb, discretized.first,
                   discretized.first / ours.median_ms, octomap_count, plain.second,
-                  ours.updates_per_second, threads, ours.median_cpu_ms);
+                  ours.updates_per_second, threads, ours.median_cpu_ms,
+                  static_cast<unsigned long long>(ours.map_hash));
     std::printf("# %s\n", line);
     std::fflush(stdout);
     summary.push_back(line);

@@ -78,7 +78,10 @@ enum class PyramidSelection {
   kMinimum,             // the nearest obstacle (Andert)
 };
 
-// The distance image M (Eq. 6) and its layers M_i (Eq. 10-11), each built from M directly.
+class DistanceBuckets;
+
+// The distance image M (Eq. 6) and its layers M_i (Eq. 10-11), identical to scanning each
+// 2^i x 2^i block of M in row order and keeping the first best measurement.
 // Layer i has ceil(width / 2^i) x ceil(height / 2^i) cells; cell (U, V) covers the pixels
 // U 2^i ... U 2^i + 2^i - 1 (and likewise in v). NaN marks a cell without valid measurement.
 class DistancePyramid {
@@ -107,7 +110,13 @@ class DistancePyramid {
     int height = 0;
     std::vector<float> cells;
   };
-  void buildLayer(int level, PyramidSelection selection);
+  void sizeLayer(int level);
+  void buildMinimumLayers();  // Andert: 2 x 2 minima of the layer below
+  void buildClosestLayers();  // Eq. 10: fine layers scanned, coarse ones from distance buckets
+  void fillBuckets(int level, DistanceBuckets* buckets) const;
+  void takeClosest(const DistanceBuckets& buckets, int level);
+  // The first measurement of the cell, in scan order, of least |d - target|.
+  float scanCell(int level, int cell_u, int cell_v, float target) const;
   // Layer `level` keeps, per cell, the first measurement of least score(measurement).
   template <class Score>
   static void fillLayer(const Layer& full, int level, Score score, Layer* layer);
