@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -86,26 +87,50 @@ struct Scores {
   double ms_per_view = 0.0;
 };
 
-// The p = 0.5 iso-surface passes within one voxel of a point when the 3 x 3 x 3 voxels around
-// the point's voxel hold one with p > 0.5 (occupied) and one with p <= 0.5 (free or unknown).
-// `above` alone: an occupied voxel lies within one voxel (the unit test's criterion).
-bool isoSurfaceNear(const VoxelMap& map, const Eigen::Vector3d& point, bool* above_out) {
+// An occupied voxel (p > 0.5) lies in the 3 x 3 x 3 voxels around the point's voxel (the unit
+// test's criterion).
+bool occupiedNear(const VoxelMap& map, const Eigen::Vector3d& point) {
   const VoxelIndex center = map.indexOf(point);
-  bool above = false, below = false;
   for (int dz = -1; dz <= 1; ++dz) {
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
         const std::optional<float> value = map.logOdds(center + VoxelIndex(dx, dy, dz));
-        if (value && *value > 0.0f) {
-          above = true;
-        } else {
-          below = true;
+        if (value && *value > 0.0f) return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Distance from the point to the nearest place where the p = 0.5 iso-surface crosses the line
+// between two axis-neighbouring voxel centres of opposite label (p > 0.5 against p <= 0.5,
+// unknown read as p = 0.5), the crossing placed by linear interpolation of the log-odds
+// (zero at p = 0.5) between the two centres. Centres within two voxels of the point's voxel
+// are searched, so any crossing nearer than one voxel is found. Infinity when there is none.
+double distanceToIsoSurface(const VoxelMap& map, const Eigen::Vector3d& point) {
+  const VoxelIndex center = map.indexOf(point);
+  const double resolution = map.resolution();
+  constexpr int kReach = 2;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int dz = -kReach; dz <= kReach; ++dz) {
+    for (int dy = -kReach; dy <= kReach; ++dy) {
+      for (int dx = -kReach; dx <= kReach; ++dx) {
+        const VoxelIndex a = center + VoxelIndex(dx, dy, dz);
+        const float la = map.logOdds(a).value_or(0.0f);
+        for (int axis = 0; axis < 3; ++axis) {
+          const VoxelIndex b = a + VoxelIndex::Unit(axis);
+          const float lb = map.logOdds(b).value_or(0.0f);
+          if ((la > 0.0f) == (lb > 0.0f)) continue;
+          // la and lb differ in sign (or one is 0), so la - lb != 0.
+          const double fraction = static_cast<double>(la) / (static_cast<double>(la) - lb);
+          const Eigen::Vector3d crossing =
+              map.centerOf(a) + fraction * resolution * Eigen::Vector3d::Unit(axis);
+          nearest = std::min(nearest, (crossing - point).norm());
         }
       }
     }
   }
-  *above_out = above;
-  return above && below;
+  return nearest;
 }
 
 Scores score(const sim::Scene& scene, const VoxelMap& map, const std::vector<View>& views,
@@ -118,9 +143,8 @@ Scores score(const sim::Scene& scene, const VoxelMap& map, const std::vector<Vie
   for (std::size_t i = 0; i < samples.size(); ++i) {
     if (!isVisible(samples[i], views, camera, 0.5 * resolution)) continue;
     ++visible;
-    bool occupied_near = false;
-    near_iso += isoSurfaceNear(map, samples[i], &occupied_near);
-    near_occupied += occupied_near;
+    near_iso += distanceToIsoSurface(map, samples[i]) <= resolution;
+    near_occupied += occupiedNear(map, samples[i]);
   }
   scores.surface_points = visible;
   scores.surface_near_iso = near_iso;
@@ -168,9 +192,10 @@ int runDepthAccuracy(const CommandLine& args) {
   // Noise-free renderings: the paper's k = sigma shape at one voxel's width. Eq. 7 crosses
   // p = 0.5 in front of a surface at sqrt(2 ln((A + 0.2) / 0.2)) sigma, A = k / (sigma
   // sqrt(2 pi)): 1.48 sigma for k = sigma, so the iso-surface lies within a voxel of the true
-  // surface only while sigma is about one voxel.
-  config.k = args.doubleValue("k", 0.02);
+  // surface only while sigma is at most about two thirds of a voxel. k defaults to sigma (the
+  // same shape at any scale).
   config.sigma = args.doubleValue("sigma", 0.02);
+  config.k = args.doubleValue("k", config.sigma);
   config.max_range = max_range;
   const sim::PinholeCamera sim_camera = sim::pirkerSyntheticCamera();
   const CameraIntrinsics camera = intrinsicsOf(sim_camera);
