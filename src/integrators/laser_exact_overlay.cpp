@@ -188,12 +188,30 @@ ExactOverlay::ExactOverlay(const OverlayGeometry& g) : geometry_(g) {
   for (std::size_t i = 0; i < cell_count; ++i) cell_start_[i + 1] += cell_start_[i];
   entries_.resize(static_cast<std::size_t>(cell_start_[cell_count]));
   std::vector<std::int64_t> next(cell_start_.begin(), cell_start_.end() - 1);
+  const int block_rows = (g.height + kBlock - 1) / kBlock;
+  block_reach_.assign(static_cast<std::size_t>(blockColumns()) * block_rows, BlockReach());
   for (const auto& pieces : per_thread) {
     for (const Piece& p : pieces) {
       entries_[static_cast<std::size_t>(next[static_cast<std::size_t>(p.cell)]++)] = {p.polar_index,
                                                                                       p.weight};
+      const int block =
+          (p.cell % g.width) / kBlock + blockColumns() * ((p.cell / g.width) / kBlock);
+      BlockReach& reach = block_reach_[static_cast<std::size_t>(block)];
+      const std::int32_t beam = p.polar_index / g.cells;
+      reach.nearest_cell = std::min(reach.nearest_cell, p.polar_index - beam * g.cells);
+      reach.first_beam = std::min(reach.first_beam, beam);
+      reach.last_beam = std::max(reach.last_beam, beam);
     }
   }
+}
+
+// Conservative: a block holding an entry (b, k) with k < observed_cells[b] has b in the span and
+// nearest_cell <= k, so it passes; near the sensor the first beam usually answers.
+bool ExactOverlay::mayBeObserved(const BlockReach& reach, const int* observed_cells) {
+  for (std::int32_t b = reach.first_beam; b <= reach.last_beam; ++b) {
+    if (observed_cells[b] > reach.nearest_cell) return true;
+  }
+  return false;
 }
 
 void ExactOverlay::apply(const PolarField& field, LogOddsRaster* raster) const {
@@ -212,27 +230,45 @@ void ExactOverlay::apply(const PolarField& field, LogOddsRaster* raster) const {
   const ReachableTiles tiles(field, g.sensor, *raster);
   const std::vector<int>& list = tiles.tiles();
   const int count = static_cast<int>(list.size());
-  const float* value = field.value.data();
-  const float* observed = field.observed.data();
+  const int* observed_cells = field.observed_cells.data();
+  static_assert(ReachableTiles::kSide % kBlock == 0, "a tile holds whole blocks");
+  constexpr int kBlocksPerTile = ReachableTiles::kSide / kBlock;
 #pragma omp parallel for schedule(dynamic, 2)
   for (int i = 0; i < count; ++i) {
     const int column = list[static_cast<std::size_t>(i)] % tiles.columns();
     const int row = list[static_cast<std::size_t>(i)] / tiles.columns();
-    const int x_end = std::min(g.width, (column + 1) * ReachableTiles::kSide);
-    const int y_end = std::min(g.height, (row + 1) * ReachableTiles::kSide);
-    for (int y = row * ReachableTiles::kSide; y < y_end; ++y) {
-      for (int x = column * ReachableTiles::kSide; x < x_end; ++x) {
-        const int cell = x + g.width * y;
-        double sum = 0.0;  // Eq. 5: g(r) = sum_i s_{i,r} f(i)
-        float coverage = 0.0f;
-        for (const Entry* e = entriesBegin(cell); e != entriesEnd(cell); ++e) {
-          sum += static_cast<double>(e->weight) * value[e->polar_index];
-          coverage += e->weight * observed[e->polar_index];
-        }
-        if (coverage > 0.0f) {
-          float& target = raster->data[static_cast<std::size_t>(cell)];
-          target = std::isnan(target) ? static_cast<float>(sum) : target + static_cast<float>(sum);
-        }
+    const int bx_end = std::min(blockColumns(), (column + 1) * kBlocksPerTile);
+    const int by_end = std::min((g.height + kBlock - 1) / kBlock, (row + 1) * kBlocksPerTile);
+    for (int by = row * kBlocksPerTile; by < by_end; ++by) {
+      for (int bx = column * kBlocksPerTile; bx < bx_end; ++bx) {
+        const BlockReach& reach = block_reach_[static_cast<std::size_t>(bx + blockColumns() * by)];
+        if (mayBeObserved(reach, observed_cells)) gatherBlock(bx, by, field, raster);
+      }
+    }
+  }
+}
+
+// Eq. 5 over the cells of one block: g(r) = sum_i s_{i,r} f(i), written where some observed polar
+// cell overlaps r.
+void ExactOverlay::gatherBlock(int block_x, int block_y, const PolarField& field,
+                               LogOddsRaster* raster) const {
+  const OverlayGeometry& g = geometry_;
+  const float* value = field.value.data();
+  const float* observed = field.observed.data();
+  const int x_end = std::min(g.width, (block_x + 1) * kBlock);
+  const int y_end = std::min(g.height, (block_y + 1) * kBlock);
+  for (int y = block_y * kBlock; y < y_end; ++y) {
+    for (int x = block_x * kBlock; x < x_end; ++x) {
+      const int cell = x + g.width * y;
+      double sum = 0.0;
+      float coverage = 0.0f;
+      for (const Entry* e = entriesBegin(cell); e != entriesEnd(cell); ++e) {
+        sum += static_cast<double>(e->weight) * value[e->polar_index];
+        coverage += e->weight * observed[e->polar_index];
+      }
+      if (coverage > 0.0f) {
+        float& target = raster->data[static_cast<std::size_t>(cell)];
+        target = std::isnan(target) ? static_cast<float>(sum) : target + static_cast<float>(sum);
       }
     }
   }

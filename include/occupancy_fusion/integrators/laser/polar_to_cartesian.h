@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <list>
 #include <memory>
 #include <string>
@@ -188,9 +189,25 @@ class ExactOverlay {
   std::size_t entryCount() const { return entries_.size(); }
 
  private:
+  // Per block of kBlock x kBlock raster cells, the beams its entries span and their nearest range
+  // cell: the block can only take a value if some beam in [first_beam, last_beam] observed past
+  // nearest_cell. Many blocks of the reachable tiles lie behind what the scan hit; skipping them
+  // saves streaming their entries, which do not fit in any cache. Blocks keep this table small
+  // (16 times fewer records than cells), so reading it costs little.
+  static constexpr int kBlock = 4;  // divides ReachableTiles::kSide
+  struct BlockReach {
+    std::int32_t nearest_cell = std::numeric_limits<std::int32_t>::max();
+    std::int32_t first_beam = std::numeric_limits<std::int32_t>::max();
+    std::int32_t last_beam = -1;
+  };
+  static inline bool mayBeObserved(const BlockReach& reach, const int* observed_cells);
+  int blockColumns() const { return (geometry_.width + kBlock - 1) / kBlock; }
+  void gatherBlock(int block_x, int block_y, const PolarField& field, LogOddsRaster* raster) const;
+
   OverlayGeometry geometry_;
   std::vector<std::int64_t> cell_start_;  // width * height + 1 offsets into entries_
   std::vector<Entry> entries_;
+  std::vector<BlockReach> block_reach_;  // blockColumns() x ceil(height / kBlock), row-major
 };
 
 // Keeps the overlays of the last `capacity` geometries (least recently used
