@@ -11,7 +11,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <functional>
@@ -315,6 +317,51 @@ std::vector<Eigen::Vector3d> occupiedCenters(const VoxelMap& map) {
   return centers;
 }
 
+// What the map holds after the run, to see where its memory goes, and a checksum of its
+// contents (FNV-1a over the known voxels' keys and log-odds bits, in key order) so that two
+// builds can be shown to produce the same map bit for bit.
+struct MapContents {
+  std::size_t blocks = 0;
+  std::size_t known_voxels = 0;
+  std::size_t occupied_voxels = 0;
+  std::size_t all_free_blocks = 0;  // blocks whose known voxels are all free
+  std::uint64_t checksum = 0;
+};
+
+MapContents mapContents(const VoxelMap& map) {
+  MapContents contents;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> voxels;
+  map.forEachBlock([&](const BlockIndex&, const VoxelBlock& block) {
+    ++contents.blocks;
+    bool any_occupied = false;
+    for (float value : block.log_odds) {
+      any_occupied = any_occupied ||
+                     (VoxelBlock::isKnown(value) && map.classify(value) == Occupancy::kOccupied);
+    }
+    contents.all_free_blocks += any_occupied ? 0 : 1;
+  });
+  map.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    voxels.emplace_back(packKey(index), bits);
+    ++contents.known_voxels;
+    contents.occupied_voxels += map.classify(value) == Occupancy::kOccupied ? 1 : 0;
+  });
+  std::sort(voxels.begin(), voxels.end());
+  std::uint64_t hash = 1469598103934665603ull;
+  const auto mix = [&hash](std::uint64_t word) {
+    for (int byte = 0; byte < 8; ++byte) {
+      hash = (hash ^ ((word >> (8 * byte)) & 0xff)) * 1099511628211ull;
+    }
+  };
+  for (const auto& [key, bits] : voxels) {
+    mix(key);
+    mix(bits);
+  }
+  contents.checksum = hash;
+  return contents;
+}
+
 std::size_t countOffSurface(const std::vector<Eigen::Vector3d>& centers,
                             const SpatialKeySet& surface, const VoxelMap& grid) {
   std::size_t off = 0;
@@ -403,6 +450,8 @@ struct CaseResult {
   MapRun ours, plain, discretized;
   std::size_t ours_occupied = 0, octomap_occupied = 0;
   std::size_t ours_off_surface = 0, octomap_off_surface = 0;
+  MapContents contents;
+  std::size_t octomap_nodes = 0, octomap_leaves = 0;
 };
 
 CaseResult runCase(const StereoView& view, const StereoView& truth, double resolution,
@@ -457,6 +506,9 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
       result.octomap_occupied = octomap_occupied.size();
       result.ours_off_surface = countOffSurface(ours_occupied, surface, map);
       result.octomap_off_surface = countOffSurface(octomap_occupied, surface, map);
+      result.contents = mapContents(map);
+      result.octomap_nodes = plain_tree.size();
+      result.octomap_leaves = plain_tree.getNumLeafNodes();
     }
   }
   result.ours.ms_per_frame = medianOf(ours_ms);
@@ -483,6 +535,17 @@ void printCase(const char* prefix, const CaseResult& c) {
       static_cast<double>(c.ours.memory_bytes) / c.plain.memory_bytes, c.ours.cache_hit_rate,
       c.ours_occupied, c.ours_off_surface, c.octomap_occupied, c.octomap_off_surface,
       c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame);
+  // Where the memory goes: dense blocks against the octree's (pruned) nodes.
+  const MapContents& m = c.contents;
+  std::printf(
+      "%smap scene=%s source=%s resolution=%g input=%s blocks=%zu block_bytes=%zu "
+      "known_voxels=%zu known_per_block=%.1f occupied_voxels=%zu all_free_blocks=%zu "
+      "octomap_nodes=%zu octomap_leaves=%zu checksum=%016llx\n",
+      prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
+      sizeof(VoxelBlock), m.known_voxels,
+      m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
+      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves,
+      static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
 }
 
