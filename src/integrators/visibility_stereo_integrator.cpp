@@ -106,23 +106,12 @@ NormalCdfTable::NormalCdfTable() : values_(kSize + 1) {
   values_[kSize] = values_[kSize - 1];  // read by operator() only with fraction 0
 }
 
-namespace {
-
-// nextVisibility's arithmetic, in this file's namespace so that the ray loop can inline it (a
-// call to the exported function goes through the shared library's PLT).
-inline double eq3Visibility(double previous, double p_occluded,
-                            const VisibilityStereoConfig& config) {
+double nextVisibility(double previous, double p_occluded, const VisibilityStereoConfig& config) {
   // Eq. 3: P(V_i | not V_i-1) = 0 leaves only the terms conditioned on a
   // visible predecessor.
   const double visibility = previous * (config.prob_visible_if_occluded * p_occluded +
                                         config.prob_visible_if_not_occluded * (1.0 - p_occluded));
   return visibility >= config.visibility_max ? 1.0 : visibility;
-}
-
-}  // namespace
-
-double nextVisibility(double previous, double p_occluded, const VisibilityStereoConfig& config) {
-  return eq3Visibility(previous, p_occluded, config);
 }
 
 double occupancyAfterMeasurement(double p_occupied, bool hit, double visibility,
@@ -269,10 +258,6 @@ struct CachedVoxel {
   VoxelIndex index;
   std::uint32_t entry;
   float occlusion;
-  // P(V_v) (Eq. 3) with which the caching ray reduced this voxel's entry; NaN where it did not
-  // (it stopped there, or it was not a castVisibility walk).
-  double visibility = kNotReduced;
-  static constexpr double kNotReduced = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct RayCounters {
@@ -314,12 +299,11 @@ class RayCaster {
  private:
   // The voxel at position j of the current ray, through the cache when the
   // previous ray had the same voxel there.
-  CachedVoxel& lookUp(const VoxelIndex& index, std::size_t j, bool need_occlusion) {
+  const CachedVoxel& lookUp(const VoxelIndex& index, std::size_t j, bool need_occlusion) {
     ++counters_.voxel_visits;
     if (j < previous_.size() && previous_[j].index == index) {
       ++counters_.cache_hits;
       current_.push_back(previous_[j]);
-      current_.back().visibility = CachedVoxel::kNotReduced;
     } else {
       const std::uint32_t entry = updates_->findOrInsert(index, frame_.origin_voxel);
       const float occlusion = need_occlusion
@@ -349,17 +333,9 @@ class RayCaster {
                            double range_sigma) const {
     const Eigen::Vector3d center = (index.cast<double>().array() + 0.5) * frame_.resolution;
     const double s = (center - frame_.origin).dot(direction);
-    if (range_sigma > 0) {
-      // Most voxels of a ray lie more than kRange sigma before the point, where the table gives
-      // exactly 0: decided without the division (a tenth of the ray loop's time). The margin
-      // keeps the test on the safe side of the quotient's rounding, so P(I_v) is unchanged.
-      const double before_point = s - range;
-      if (before_point < -kZeroBelowSigmas * range_sigma) return 0.0;
-      return frame_.phi(before_point / range_sigma);
-    }
+    if (range_sigma > 0) return frame_.phi((s - range) / range_sigma);
     return s >= range ? 1.0 : 0.0;
   }
-  static constexpr double kZeroBelowSigmas = NormalCdfTable::kRange * (1.0 + 1e-9);
 
   // A point beyond max_range, as OctoMap's insertPointCloud treats it: the ray up to max_range
   // (the voxel holding the cut left out) is updated as a miss and nothing as a hit. In the
@@ -376,7 +352,7 @@ class RayCaster {
         updates_->reduce(voxel.entry, 0.0f, 1.0f);
         continue;
       }
-      visibility = eq3Visibility(visibility, voxel.occlusion, frame_.config);  // Eq. 3
+      visibility = nextVisibility(visibility, voxel.occlusion, frame_.config);  // Eq. 3
       if (visibility < frame_.config.visibility_min) {
         ++counters_.rays_invisible;
         return;
@@ -397,38 +373,15 @@ class RayCaster {
     // sigma past the point; the bound only guards against rounding.
     const std::size_t max_steps =
         static_cast<std::size_t>(3 * (range + 6.0 * range_sigma) / f.resolution + 8);
-    // A voxel entered before this segment parameter has its centre (at most half a diagonal,
-    // < one voxel, from the entry point) more than kRange sigma before the point: P(I_v) = 0
-    // exactly, known without the centre. The margin (a whole voxel) covers the entry
-    // parameter's rounding.
-    const double zero_inside_before = 1.0 - (kZeroBelowSigmas * range_sigma + f.resolution) / range;
-    // While this ray has met the previous ray's voxels at the same positions from the sensor
-    // on, Eq. 3 gives it the previous ray's visibilities (same occlusions, same start), and
-    // where P(I_v) is 0 its reduce cannot change the entry (the previous ray's reduce holds
-    // max(P(I_v), 0) and the same visibility): both are skipped, with identical results.
-    bool same_as_previous = true;
     double visibility = 1.0;
     for (std::size_t j = 0; j < max_steps; ++j) {
-      CachedVoxel& voxel = lookUp(ray.current(), j, true);
-      same_as_previous = same_as_previous && j < previous_.size() &&
-                         previous_[j].index == voxel.index && !std::isnan(previous_[j].visibility);
-      const bool zero_inside = ray.entryParameter() < zero_inside_before;
-      if (same_as_previous) {
-        visibility = previous_[j].visibility;  // >= q_min: that ray went on
-      } else {
-        visibility = eq3Visibility(visibility, voxel.occlusion, f.config);  // Eq. 3
-        if (visibility < f.config.visibility_min) {
-          ++counters_.rays_invisible;
-          return;
-        }
+      const CachedVoxel& voxel = lookUp(ray.current(), j, true);
+      visibility = nextVisibility(visibility, voxel.occlusion, f.config);  // Eq. 3
+      if (visibility < f.config.visibility_min) {
+        ++counters_.rays_invisible;
+        return;
       }
-      voxel.visibility = visibility;
-      if (same_as_previous && zero_inside) {
-        ray.next();
-        continue;
-      }
-      double p_inside =
-          zero_inside ? 0.0 : insideProbability(voxel.index, direction, range, range_sigma);
+      double p_inside = insideProbability(voxel.index, direction, range, range_sigma);
       const bool stop = p_inside >= f.config.inside_stop_probability;
       if (stop) p_inside = 1.0;  // the one further voxel with a full hit (Sec. III-C)
       updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
