@@ -537,15 +537,20 @@ void printCase(const char* prefix, const CaseResult& c) {
       c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame);
   // Where the memory goes: dense blocks against the octree's (pruned) nodes.
   const MapContents& m = c.contents;
+  // The blocks alone, without the hash table and VoxelMap's change log (which memoryBytes()
+  // includes and which grows with every frame's written blocks, up to its cap): the part
+  // comparable with OcTree::memoryUsage(), which counts the tree's nodes only.
+  const double block_storage = static_cast<double>(m.blocks * sizeof(VoxelBlock));
   std::printf(
       "%smap scene=%s source=%s resolution=%g input=%s blocks=%zu block_bytes=%zu "
       "known_voxels=%zu known_per_block=%.1f occupied_voxels=%zu all_free_blocks=%zu "
-      "octomap_nodes=%zu octomap_leaves=%zu checksum=%016llx\n",
+      "octomap_nodes=%zu octomap_leaves=%zu block_storage_kb=%.0f block_storage_ratio=%.3f "
+      "checksum=%016llx\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
       sizeof(VoxelBlock), m.known_voxels,
       m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
-      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves,
-      static_cast<unsigned long long>(m.checksum));
+      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, block_storage / 1024.0,
+      block_storage / c.plain.memory_bytes, static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
 }
 
