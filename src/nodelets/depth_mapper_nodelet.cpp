@@ -15,31 +15,24 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <image_transport/camera_common.h>
 #include <image_transport/image_transport.h>
 #include <image_transport/subscriber_filter.h>
 #include <message_filters/cache.h>
 #include <message_filters/subscriber.h>
-#include <nodelet/nodelet.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
-#include <tf2_eigen/tf2_eigen.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
-#include <tf2_ros/transform_listener.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/params/depth_config_reader.h"
-#include "occupancy_fusion/ros/map_publisher.h"
-#include "occupancy_fusion/ros/ros_parameter_source.h"
-#include "occupancy_fusion/ros/shared_map_access.h"
+#include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -144,45 +137,25 @@ CameraIntrinsics intrinsicsFor(const sensor_msgs::CameraInfo& info,
 
 }  // namespace
 
-class DepthMapper : public nodelet::Nodelet {
+class DepthMapper : public MapperNodeletBase {
  private:
   using Image = sensor_msgs::Image;
   using CameraInfo = sensor_msgs::CameraInfo;
 
   void onInit() override {
-    const RosParameterSource parameters(getPrivateNodeHandle());
-    int queue_size = 5;
-    bool publish_map = false;
-    try {
-      map_ = acquireSharedMap(parameters, getName());
+    setUpMapper([this](const ParameterSource& parameters) {
       integrator_ = std::make_unique<PyramidDepthIntegrator>(readPyramidDepthConfig(parameters));
-      parameters.get("queue_size", &queue_size);
-      if (queue_size < 1) throw std::invalid_argument("queue_size must be >= 1");
-      parameters.get("publish_map", &publish_map);
-      if (publish_map) {
-        map_publisher_ =
-            std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(), getName(), map_,
-                                           readMapPublisherConfig(parameters));
-      }
-    } catch (const std::invalid_argument& error) {
-      NODELET_FATAL("invalid parameter: %s", error.what());
-      throw;
-    }
-    subscribe(queue_size);
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
-                                                                 getPrivateNodeHandle(), getName());
-    diagnostics_->setHardwareID("map '" + map_->name() + "'");
-    diagnostics_->add("depth mapping", this, &DepthMapper::fillDiagnostics);
-    diagnostics_timer_ = getNodeHandle().createTimer(
-        ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+    });
+    subscribe(queueSize());
+    startDiagnostics("depth mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& status) {
+      fillDiagnostics(status);
+    });
     NODELET_INFO("mapping depth images from '%s' with camera_info from '%s' (%s method)",
                  image_subscriber_.getTopic().c_str(), camera_info_subscriber_.getTopic().c_str(),
                  toString(integrator_->config().method).c_str());
   }
 
   void subscribe(int queue_size) {
-    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
     image_transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
     // ~image_transport picks the transport, as for a CameraSubscriber.
     image_subscriber_.subscribe(
@@ -194,18 +167,8 @@ class DepthMapper : public nodelet::Nodelet {
     // Long enough to hold the camera_info of every image the tf2 filter may still hold back.
     camera_infos_.setCacheSize(static_cast<unsigned int>(2 * queue_size + 2));
     camera_infos_.connectInput(camera_info_subscriber_);
-
-    // Callbacks run on this nodelet's queue (the node handle's), not on the tf thread.
-    tf_filter_ = std::make_unique<tf2_ros::MessageFilter<Image>>(
-        image_subscriber_, *tf_buffer_, map_->frameId(), queue_size, getNodeHandle());
-    tf_filter_->registerCallback([this](const Image::ConstPtr& image) { onImage(*image); });
-    tf_filter_->registerFailureCallback(
-        [this](const Image::ConstPtr& image, tf2_ros::filter_failure_reasons::FilterFailureReason) {
-          ++dropped_no_transform_;
-          NODELET_WARN_THROTTLE(5.0, "no transform from '%s' to '%s' at %.3f: depth image dropped",
-                                image->header.frame_id.c_str(), map_->frameId().c_str(),
-                                image->header.stamp.toSec());
-        });
+    tf_filter_ = makeMapFrameFilter<Image>(image_subscriber_, "depth image", &dropped_no_transform_,
+                                           [this](const Image& image) { onImage(image); });
   }
 
   // The camera_info stamped like the image, else the latest one; null when none arrived yet.
@@ -224,17 +187,11 @@ class DepthMapper : public nodelet::Nodelet {
                             camera_info_subscriber_.getTopic().c_str());
       return;
     }
-    Eigen::Isometry3d T_map_camera;
+    const std::optional<Eigen::Isometry3d> T_map_camera =
+        poseInMap(image, "depth image", &dropped_no_transform_);
+    if (!T_map_camera) return;
     try {
-      T_map_camera = tf2::transformToEigen(
-          tf_buffer_->lookupTransform(map_->frameId(), image.header.frame_id, image.header.stamp));
-    } catch (const tf2::TransformException& error) {
-      ++dropped_no_transform_;
-      NODELET_WARN_THROTTLE(5.0, "depth image dropped: %s", error.what());
-      return;
-    }
-    try {
-      integrate(image, *info, T_map_camera);
+      integrate(image, *info, *T_map_camera);
     } catch (const DroppedImage& error) {
       ++(error.reason() == DroppedImage::Reason::kEncoding ? dropped_encoding_
                                                            : dropped_camera_info_);
@@ -248,7 +205,7 @@ class DepthMapper : public nodelet::Nodelet {
     const CameraIntrinsics camera = intrinsicsFor(info, image);
     std::vector<float> storage;
     const DepthImageView depth = depthInMetres(image, &storage);
-    last_stats_ = integrator_->integrate(depth, camera, T_map_camera, &map_->voxels());
+    last_stats_ = integrator_->integrate(depth, camera, T_map_camera, &map().voxels());
     ++integrated_images_;
     NODELET_DEBUG("integrated a %dx%d depth image: %zu voxels in %.1f ms", camera.width,
                   camera.height, last_stats_.voxels_updated, last_stats_.milliseconds);
@@ -272,20 +229,13 @@ class DepthMapper : public nodelet::Nodelet {
     status.add("last image ms", last_stats_.milliseconds);
   }
 
-  std::shared_ptr<SharedMap> map_;
   std::unique_ptr<PyramidDepthIntegrator> integrator_;
-  std::unique_ptr<MapPublisher> map_publisher_;
-
-  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   image_transport::SubscriberFilter image_subscriber_;
   message_filters::Subscriber<CameraInfo> camera_info_subscriber_;
   message_filters::Cache<CameraInfo> camera_infos_;
   std::unique_ptr<tf2_ros::MessageFilter<Image>> tf_filter_;
 
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::Timer diagnostics_timer_;
   std::atomic<std::size_t> integrated_images_{0};
   std::atomic<std::size_t> dropped_no_transform_{0};
   std::atomic<std::size_t> dropped_no_camera_info_{0};

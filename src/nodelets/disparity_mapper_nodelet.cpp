@@ -11,87 +11,51 @@
 // (another size) is detected per frame, and the frame dropped.
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <message_filters/subscriber.h>
-#include <nodelet/nodelet.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <stereo_msgs/DisparityImage.h>
-#include <tf2_eigen/tf2_eigen.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
-#include <tf2_ros/transform_listener.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/params/stereo_config_reader.h"
 #include "occupancy_fusion/ros/disparity_messages.h"
-#include "occupancy_fusion/ros/map_publisher.h"
-#include "occupancy_fusion/ros/ros_parameter_source.h"
-#include "occupancy_fusion/ros/shared_map_access.h"
+#include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
 namespace occupancy_fusion {
 
-class DisparityMapper : public nodelet::Nodelet {
+class DisparityMapper : public MapperNodeletBase {
  private:
   using Disparity = stereo_msgs::DisparityImage;
 
   void onInit() override {
-    const RosParameterSource parameters(getPrivateNodeHandle());
-    int queue_size = 5;
-    bool publish_map = false;
-    try {
-      map_ = acquireSharedMap(parameters, getName());
+    setUpMapper([this](const ParameterSource& parameters) {
       integrator_ =
           std::make_unique<VisibilityStereoIntegrator>(readVisibilityStereoConfig(parameters));
-      parameters.get("queue_size", &queue_size);
-      if (queue_size < 1) throw std::invalid_argument("queue_size must be >= 1");
-      parameters.get("publish_map", &publish_map);
-      if (publish_map) {
-        map_publisher_ =
-            std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(), getName(), map_,
-                                           readMapPublisherConfig(parameters));
-      }
-    } catch (const std::invalid_argument& error) {
-      NODELET_FATAL("invalid parameter: %s", error.what());
-      throw;
-    }
+    });
     NODELET_INFO("stereo method '%s', input resolution %s",
                  toString(integrator_->config().method).c_str(),
                  toString(integrator_->config().disparity.input_resolution).c_str());
-    subscribe(queue_size);
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
-                                                                 getPrivateNodeHandle(), getName());
-    diagnostics_->setHardwareID("map '" + map_->name() + "'");
-    diagnostics_->add("disparity mapping", this, &DisparityMapper::fillDiagnostics);
-    diagnostics_timer_ = getNodeHandle().createTimer(
-        ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+    subscribe();
+    startDiagnostics(
+        "disparity mapping",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
   }
 
   // All callbacks run on this nodelet's single-threaded queue (getNodeHandle()), so the cached
   // camera_info needs no lock.
-  void subscribe(int queue_size) {
+  void subscribe() {
     camera_info_subscriber_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
         "camera_info", 1,
         [this](const sensor_msgs::CameraInfo::ConstPtr& info) { camera_info_ = info; });
-    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
-    disparity_subscriber_.subscribe(getNodeHandle(), "disparity", queue_size);
-    tf_filter_ = std::make_unique<tf2_ros::MessageFilter<Disparity>>(
-        disparity_subscriber_, *tf_buffer_, map_->frameId(), queue_size, getNodeHandle());
-    tf_filter_->registerCallback(
-        [this](const Disparity::ConstPtr& disparity) { onDisparity(*disparity); });
-    tf_filter_->registerFailureCallback(
-        [this](const Disparity::ConstPtr& disparity,
-               tf2_ros::filter_failure_reasons::FilterFailureReason) {
-          ++dropped_no_transform_;
-          NODELET_WARN_THROTTLE(5.0, "no transform from '%s' to '%s' at %.3f: image dropped",
-                                disparity->header.frame_id.c_str(), map_->frameId().c_str(),
-                                disparity->header.stamp.toSec());
-        });
+    disparity_subscriber_.subscribe(getNodeHandle(), "disparity", queueSize());
+    tf_filter_ = makeMapFrameFilter<Disparity>(
+        disparity_subscriber_, "disparity image", &dropped_no_transform_,
+        [this](const Disparity& disparity) { onDisparity(disparity); });
   }
 
   // The header of a DisparityImage is the left optical frame's (stereo_image_proc copies the left
@@ -113,18 +77,12 @@ class DisparityMapper : public nodelet::Nodelet {
       NODELET_ERROR_THROTTLE(5.0, "disparity image dropped: %s", error.what());
       return;
     }
-    Eigen::Isometry3d T_map_camera;
-    try {
-      T_map_camera = tf2::transformToEigen(tf_buffer_->lookupTransform(
-          map_->frameId(), message.header.frame_id, message.header.stamp));
-    } catch (const tf2::TransformException& error) {
-      ++dropped_no_transform_;
-      NODELET_WARN_THROTTLE(5.0, "disparity image dropped: %s", error.what());
-      return;
-    }
+    const std::optional<Eigen::Isometry3d> T_map_camera =
+        poseInMap(message, "disparity image", &dropped_no_transform_);
+    if (!T_map_camera) return;
     const DisparityImageView view{static_cast<int>(message.image.width),
                                   static_cast<int>(message.image.height), disparity.data(), 0};
-    last_stats_ = integrator_->integrate(view, camera, T_map_camera, &map_->voxels());
+    last_stats_ = integrator_->integrate(view, camera, *T_map_camera, &map().voxels());
     ++integrated_images_;
     skipped_points_ += last_stats_.skipped_points;
     dropped_uncertain_points_ += last_stats_.dropped_uncertain;
@@ -152,22 +110,15 @@ class DisparityMapper : public nodelet::Nodelet {
     status.add("last image voxels updated", last_stats_.updated_voxels);
     status.add("last image cache hit rate", last_stats_.cacheHitRate());
     status.add("last image ms", last_stats_.milliseconds());
-    status.add("map version", map_->voxels().version());
+    status.add("map version", map().voxels().version());
   }
 
-  std::shared_ptr<SharedMap> map_;
   std::unique_ptr<VisibilityStereoIntegrator> integrator_;
-  std::unique_ptr<MapPublisher> map_publisher_;
-
   ros::Subscriber camera_info_subscriber_;
   sensor_msgs::CameraInfo::ConstPtr camera_info_;
-  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   message_filters::Subscriber<Disparity> disparity_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<Disparity>> tf_filter_;
 
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::Timer diagnostics_timer_;
   std::atomic<std::size_t> integrated_images_{0};
   std::atomic<std::size_t> dropped_invalid_{0};
   std::atomic<std::size_t> dropped_no_camera_info_{0};

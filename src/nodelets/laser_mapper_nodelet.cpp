@@ -18,22 +18,14 @@
 #include <string>
 #include <vector>
 
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <message_filters/subscriber.h>
 #include <nav_msgs/OccupancyGrid.h>
-#include <nodelet/nodelet.h>
 #include <sensor_msgs/LaserScan.h>
-#include <tf2_eigen/tf2_eigen.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
-#include <tf2_ros/transform_listener.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/params/laser_config_reader.h"
-#include "occupancy_fusion/ros/map_publisher.h"
-#include "occupancy_fusion/ros/ros_parameter_source.h"
-#include "occupancy_fusion/ros/shared_map_access.h"
+#include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -103,7 +95,7 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-class LaserMapper : public nodelet::Nodelet {
+class LaserMapper : public MapperNodeletBase {
  private:
   // One observation source: its subscriber, filter, integrator for the world layer, and its
   // latest scan with its pose in the vehicle frame for the local grid.
@@ -123,55 +115,34 @@ class LaserMapper : public nodelet::Nodelet {
   };
 
   void onInit() override {
-    const RosParameterSource parameters(getPrivateNodeHandle());
-    int queue_size = 5;
-    bool publish_map = false;
-    try {
-      map_ = acquireSharedMap(parameters, getName());
-      config_ = readLaserMapperConfig(parameters);
-      parameters.get("queue_size", &queue_size);
-      if (queue_size < 1) throw std::invalid_argument("queue_size must be >= 1");
-      parameters.get("publish_map", &publish_map);
-      if (publish_map) {
-        map_publisher_ =
-            std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(), getName(), map_,
-                                           readMapPublisherConfig(parameters));
-      }
-    } catch (const std::invalid_argument& error) {
-      NODELET_FATAL("invalid parameter: %s", error.what());
-      throw;
-    }
-    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
-    for (const LaserSourceConfig& source : config_.sources) subscribe(source, queue_size);
+    setUpMapper(
+        [this](const ParameterSource& parameters) { config_ = readLaserMapperConfig(parameters); });
+    for (const LaserSourceConfig& source : config_.sources) subscribe(source);
     startLocalGrid();
-    startDiagnostics();
+    startDiagnostics("laser mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& status) {
+      fillDiagnostics(status);
+    });
     NODELET_INFO("mapping %zu laser source(s) into map '%s' (frame '%s') and a local grid in '%s'",
-                 sources_.size(), map_->name().c_str(), map_->frameId().c_str(),
+                 sources_.size(), map().name().c_str(), map().frameId().c_str(),
                  config_.local_grid.frame_id.c_str());
   }
 
-  void subscribe(const LaserSourceConfig& config, int queue_size) {
+  void subscribe(const LaserSourceConfig& config) {
     sources_.push_back(std::make_unique<Source>());
     Source* source = sources_.back().get();
     source->config = config;
     source->world_integrator = std::make_unique<PolarLaserIntegrator>(config.integrator);
-    source->subscriber.subscribe(getNodeHandle(), config.topic, queue_size);
-    // Callbacks run on this nodelet's queue (the node handle's), not on the tf thread.
-    source->filter = std::make_unique<tf2_ros::MessageFilter<ScanMessage>>(
-        source->subscriber, *tf_buffer_, config_.local_grid.frame_id, queue_size, getNodeHandle());
+    source->subscriber.subscribe(getNodeHandle(), config.topic, queueSize());
     std::vector<std::string> targets = {config_.local_grid.frame_id};
-    if (config_.write_world_layer) targets.push_back(map_->frameId());
-    source->filter->setTargetFrames(targets);
-    source->filter->registerCallback(
-        [this, source](const ScanMessage::ConstPtr& scan) { onScan(*scan, source); });
-    source->filter->registerFailureCallback(
-        [this, source](const ScanMessage::ConstPtr& scan,
-                       tf2_ros::filter_failure_reasons::FilterFailureReason) {
+    if (config_.write_world_layer) targets.push_back(map().frameId());
+    source->filter = makeTransformFilter<ScanMessage>(
+        source->subscriber, targets,
+        [this, source](const ScanMessage& scan) { onScan(scan, source); },
+        [this, source](const ScanMessage& scan) {
           ++source->dropped;
           NODELET_WARN_THROTTLE(5.0, "source '%s': no transform from '%s' at %.3f: scan dropped",
-                                source->config.name.c_str(), scan->header.frame_id.c_str(),
-                                scan->header.stamp.toSec());
+                                source->config.name.c_str(), scan.header.frame_id.c_str(),
+                                scan.header.stamp.toSec());
         });
   }
 
@@ -180,7 +151,7 @@ class LaserMapper : public nodelet::Nodelet {
   Pose2D planarPoseIn(const std::string& frame, const std::string& sensor_frame,
                       const ros::Time& stamp, double max_tilt, bool* upside_down) const {
     const Eigen::Isometry3d pose =
-        tf2::transformToEigen(tf_buffer_->lookupTransform(frame, sensor_frame, stamp));
+        tf2::transformToEigen(tfBuffer().lookupTransform(frame, sensor_frame, stamp));
     if (!isFinite(pose)) {
       throw std::invalid_argument("pose of '" + sensor_frame + "' in '" + frame +
                                   "' is not finite");
@@ -201,12 +172,12 @@ class LaserMapper : public nodelet::Nodelet {
                        source->config.max_tilt, &upside_in_vehicle);
       std::optional<Pose2D> in_map;
       if (config_.write_world_layer) {
-        in_map = planarPoseIn(map_->frameId(), sensor_frame, message.header.stamp,
+        in_map = planarPoseIn(map().frameId(), sensor_frame, message.header.stamp,
                               source->config.max_tilt, &upside_in_map);
       }
       if (in_map) {
         source->world_integrator->integrateIntoLayer(upside_in_map ? mirrorScan(scan) : scan,
-                                                     *in_map, &map_->layer());
+                                                     *in_map, &map().layer());
       }
       keepForLocalGrid(upside_in_vehicle ? mirrorScan(scan) : scan, in_vehicle,
                        message.header.stamp, source);
@@ -277,15 +248,6 @@ class LaserMapper : public nodelet::Nodelet {
     last_local_grid_ms_ = millisecondsSince(start);
   }
 
-  void startDiagnostics() {
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
-                                                                 getPrivateNodeHandle(), getName());
-    diagnostics_->setHardwareID("map '" + map_->name() + "'");
-    diagnostics_->add("laser mapping", this, &LaserMapper::fillDiagnostics);
-    diagnostics_timer_ = getNodeHandle().createTimer(
-        ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
-  }
-
   void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
     std::size_t integrated = 0, dropped = 0, rejected = 0;
     for (const auto& source : sources_) {
@@ -307,20 +269,13 @@ class LaserMapper : public nodelet::Nodelet {
     status.add("last local grid ms", last_local_grid_ms_.load());
   }
 
-  std::shared_ptr<SharedMap> map_;
   LaserMapperConfig config_;
-  std::unique_ptr<MapPublisher> map_publisher_;
-  // Declared before the sources: their message filters unregister from the buffer when they go.
-  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::vector<std::unique_ptr<Source>> sources_;
 
   std::mutex local_mutex_;
   ros::Publisher local_grid_publisher_;
   ros::Timer local_grid_timer_;
 
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::Timer diagnostics_timer_;
   std::atomic<double> last_scan_ms_{0.0};
   std::atomic<std::size_t> local_grid_cycles_{0};
   std::atomic<double> last_local_grid_ms_{0.0};

@@ -1,0 +1,42 @@
+#include "occupancy_fusion/ros/mapper_nodelet_base.h"
+
+#include <stdexcept>
+
+#include "occupancy_fusion/ros/ros_parameter_source.h"
+#include "occupancy_fusion/ros/shared_map_access.h"
+
+namespace occupancy_fusion {
+
+void MapperNodeletBase::setUpMapper(
+    const std::function<void(const ParameterSource&)>& read_mapper_config) {
+  const RosParameterSource parameters(getPrivateNodeHandle());
+  bool publish_map = false;
+  try {
+    map_ = acquireSharedMap(parameters, getName());
+    read_mapper_config(parameters);
+    parameters.get("queue_size", &queue_size_);
+    if (queue_size_ < 1) throw std::invalid_argument("queue_size must be >= 1");
+    parameters.get("publish_map", &publish_map);
+    if (publish_map) {
+      map_publisher_ =
+          std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(), getName(), map_,
+                                         readMapPublisherConfig(parameters));
+    }
+  } catch (const std::invalid_argument& error) {
+    NODELET_FATAL("invalid parameter: %s", error.what());
+    throw;
+  }
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
+}
+
+void MapperNodeletBase::startDiagnostics(const std::string& task_name, DiagnosticsTask fill) {
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
+                                                               getPrivateNodeHandle(), getName());
+  diagnostics_->setHardwareID("map '" + map_->name() + "'");
+  diagnostics_->add(task_name, std::move(fill));
+  diagnostics_timer_ = getNodeHandle().createTimer(
+      ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+}
+
+}  // namespace occupancy_fusion
