@@ -191,6 +191,7 @@ struct MapRun {
   std::size_t memory_bytes = 0;
   double cache_hit_rate = 0.0;
   std::size_t points_per_frame = 0;
+  double voxel_visits_per_frame = 0.0;  // voxel steps of all rays (ours only)
 };
 
 // P(O) of never-observed neighbours in Eq. 1 (--unknown_neighbour_occupancy); the core's default.
@@ -220,6 +221,7 @@ MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& pos
   run.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / poses.size();
   run.memory_bytes = map->memoryBytes();
   run.cache_hit_rate = visits == 0 ? 0.0 : static_cast<double>(hits) / visits;
+  run.voxel_visits_per_frame = static_cast<double>(visits) / poses.size();
   return run;
 }
 
@@ -545,12 +547,13 @@ void printCase(const char* prefix, const CaseResult& c) {
       "%smap scene=%s source=%s resolution=%g input=%s blocks=%zu block_bytes=%zu "
       "known_voxels=%zu known_per_block=%.1f occupied_voxels=%zu all_free_blocks=%zu "
       "octomap_nodes=%zu octomap_leaves=%zu block_storage_kb=%.0f block_storage_ratio=%.3f "
-      "checksum=%016llx\n",
+      "voxel_visits_per_frame=%.0f checksum=%016llx\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
       sizeof(VoxelBlock), m.known_voxels,
       m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
       m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, block_storage / 1024.0,
-      block_storage / c.plain.memory_bytes, static_cast<unsigned long long>(m.checksum));
+      block_storage / c.plain.memory_bytes, c.ours.voxel_visits_per_frame,
+      static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
 }
 
