@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -25,13 +24,13 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
-#include <std_srvs/SetBool.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
 #include "occupancy_fusion/Octomap.h"
 #include "occupancy_fusion/sim/scenes.h"
+#include "rostest_support.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -136,28 +135,17 @@ class Observer {
     }
     images_.push_back(std::move(observed));
   }
-  static std::size_t valueOf(const diagnostic_msgs::DiagnosticStatus& status,
-                             const std::string& key) {
-    for (const auto& entry : status.values) {
-      if (entry.key == key) return std::stoul(entry.value);
-    }
-    return 0;
-  }
-  static bool endsWith(const std::string& text, const std::string& suffix) {
-    return text.size() >= suffix.size() &&
-           text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
-  }
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& status : array->status) {
-      if (endsWith(status.name, "depth mapping")) {
-        counters_.integrated = valueOf(status, "images integrated");
-        counters_.dropped_encoding = valueOf(status, "images dropped (encoding)");
-        counters_.dropped_camera_info = valueOf(status, "images dropped (camera_info)");
+      if (isTask(status, "depth mapping")) {
+        counters_.integrated = diagnosticCount(status, "images integrated");
+        counters_.dropped_encoding = diagnosticCount(status, "images dropped (encoding)");
+        counters_.dropped_camera_info = diagnosticCount(status, "images dropped (camera_info)");
         counters_.seen = true;
       }
-      if (endsWith(status.name, "map publishing")) {
-        counters_.known_voxels = valueOf(status, "known voxels");
+      if (isTask(status, "map publishing")) {
+        counters_.known_voxels = diagnosticCount(status, "known voxels");
       }
     }
   }
@@ -175,21 +163,6 @@ class Observer {
 };
 
 Observer* g_observer = nullptr;
-
-bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
-  while (ros::ok() && ros::WallTime::now() < deadline) {
-    if (condition()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return condition();
-}
-
-bool pauseSimulator(bool pause) {
-  std_srvs::SetBool request;
-  request.request.data = pause;
-  return ros::service::call("/simulator/pause", request);
-}
 
 std::unique_ptr<octomap::OcTree> treeOf(const occupancy_fusion::Octomap& message) {
   auto tree = std::make_unique<octomap::OcTree>(message.resolution);
@@ -250,7 +223,7 @@ TEST(SimDepthMapping, MapMatchesGroundTruth) {
       },
       90.0))
       << "only " << g_observer->counters().integrated << " depth images integrated";
-  ASSERT_TRUE(pauseSimulator(true));
+  ASSERT_TRUE(setSimulatorPaused(true));
   const occupancy_fusion::Octomap::ConstPtr message = settledMap();
   g_observer->stopObserving();
   ASSERT_TRUE(message);
@@ -404,7 +377,7 @@ TEST(SimDepthMapping, BadFramesLeaveTheMapUnchanged) {
       << "a good frame did not change the map";
 
   // The mapper keeps running on the simulator's images.
-  ASSERT_TRUE(pauseSimulator(false));
+  ASSERT_TRUE(setSimulatorPaused(false));
   const std::size_t integrated = g_observer->counters().integrated;
   EXPECT_TRUE(waitUntil([&] { return g_observer->counters().integrated >= integrated + 5; }, 20.0));
 }
@@ -422,9 +395,5 @@ int main(int argc, char** argv) {
   private_node_handle.param("resolution", settings.resolution, settings.resolution);
   occupancy_fusion::Observer observer(node_handle);
   occupancy_fusion::g_observer = &observer;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  return result;
+  return occupancy_fusion::runTestsWhileSpinning();
 }

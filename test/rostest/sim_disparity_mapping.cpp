@@ -2,10 +2,8 @@
 // stereo camera in the room scene, against the scene's analytic ground truth; then that malformed
 // disparity images (wrong encoding, a size that does not fit camera_info) are dropped, leave the
 // map as it was, and do not stop the mapper.
-#include <array>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -17,11 +15,10 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <sensor_msgs/point_cloud2_iterator.h>
-#include <std_srvs/SetBool.h>
 #include <stereo_msgs/DisparityImage.h>
 
 #include "occupancy_fusion/sim/scenes.h"
+#include "rostest_support.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -77,11 +74,7 @@ class MapObserver {
   }
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
     for (const auto& status : array->status) {
-      const std::string suffix = "disparity mapping";
-      if (status.name.size() < suffix.size() ||
-          status.name.compare(status.name.size() - suffix.size(), suffix.size(), suffix) != 0) {
-        continue;
-      }
+      if (!isTask(status, "disparity mapping")) continue;
       std::map<std::string, std::string> values;
       for (const auto& entry : status.values) values[entry.key] = entry.value;
       std::lock_guard<std::mutex> lock(mutex_);
@@ -103,35 +96,10 @@ Settings g_settings;
 MapObserver* g_observer = nullptr;
 ros::Publisher* g_disparity_publisher = nullptr;
 
-bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
-  while (ros::ok() && ros::WallTime::now() < deadline) {
-    if (condition()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return condition();
-}
-
-bool setPaused(bool paused) {
-  std_srvs::SetBool pause;
-  pause.request.data = paused;
-  return ros::service::call("/simulator/pause", pause) && pause.response.success;
-}
-
-std::vector<Eigen::Vector3d> cloudPoints(const sensor_msgs::PointCloud2& cloud) {
-  std::vector<Eigen::Vector3d> points;
-  sensor_msgs::PointCloud2ConstIterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
-  for (; x != x.end(); ++x, ++y, ++z) points.emplace_back(*x, *y, *z);
-  return points;
-}
-
 // Whether the vertical segment over (x, y) within the height band meets a solid.
-bool columnHitsSolid(const sim::Scene& scene, const Eigen::Vector2d& xy) {
-  const double step = 0.25 * g_settings.resolution;
-  for (double z = g_settings.min_z; z <= g_settings.max_z; z += step) {
-    if (scene.isOccupied({xy.x(), xy.y(), z})) return true;
-  }
-  return false;
+bool bandHitsSolid(const sim::Scene& scene, const Eigen::Vector2d& xy) {
+  return columnHitsSolid(scene, xy, g_settings.min_z, g_settings.max_z,
+                         0.25 * g_settings.resolution);
 }
 
 // A disparity image of the optical frame stamped now, every pixel at 10 px (a surface 1.6 m in
@@ -159,7 +127,7 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
   ASSERT_TRUE(waitUntil(
       [] { return g_observer->counters().integrated >= std::size_t(g_settings.min_images); }, 90.0))
       << "only " << g_observer->counters().integrated << " disparity images integrated";
-  ASSERT_TRUE(setPaused(true));
+  ASSERT_TRUE(setSimulatorPaused(true));
   // Let images in flight be integrated and published; then the map stays as it is.
   ros::WallDuration(2.0).sleep();
   const sensor_msgs::PointCloud2::ConstPtr cloud = g_observer->cloud();
@@ -172,9 +140,7 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
   // 262.4 px) * (4 m)^2 = 0.1 m).
   const std::vector<Eigen::Vector3d> centres = cloudPoints(*cloud);
   const double tolerance = std::sqrt(3.0) * g_settings.resolution + 0.1;
-  std::size_t near = 0;
-  for (const Eigen::Vector3d& c : centres) near += scene.distanceToSurface(c) <= tolerance;
-  const double near_fraction = centres.empty() ? 0.0 : double(near) / centres.size();
+  const double near_fraction = fractionNearSurface(centres, scene, tolerance);
   ROS_INFO("%zu occupied voxels, %.2f %% within %.2f m of a surface", centres.size(),
            100.0 * near_fraction, tolerance);
   EXPECT_GE(centres.size(), 8000u);
@@ -185,11 +151,8 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
   for (int y = 0; y < static_cast<int>(grid->info.height); ++y) {
     for (int x = 0; x < static_cast<int>(grid->info.width); ++x) {
       if (grid->data[static_cast<std::size_t>(x + grid->info.width * y)] != 0) continue;
-      const Eigen::Vector2d centre(
-          grid->info.origin.position.x + (x + 0.5) * grid->info.resolution,
-          grid->info.origin.position.y + (y + 0.5) * grid->info.resolution);
       ++free_cells;
-      free_correct += columnHitsSolid(scene, centre) ? 0 : 1;
+      free_correct += bandHitsSolid(scene, cellCentre(*grid, x, y)) ? 0 : 1;
     }
   }
   ROS_INFO("grid: %zu free cells, %.2f %% free in the scene", free_cells,
@@ -199,7 +162,7 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
 }
 
 TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
-  ASSERT_TRUE(setPaused(true));
+  ASSERT_TRUE(setSimulatorPaused(true));
   ros::WallDuration(2.0).sleep();  // images in flight integrated, counters published
   const MapperCounters before = g_observer->counters();
   ASSERT_GT(before.integrated, 0u);
@@ -221,7 +184,7 @@ TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
   EXPECT_EQ(after.map_version, before.map_version);  // not a single voxel written
 
   // The mapper goes on with good images.
-  ASSERT_TRUE(setPaused(false));
+  ASSERT_TRUE(setSimulatorPaused(false));
   EXPECT_TRUE(
       waitUntil([&] { return g_observer->counters().integrated > after.integrated; }, 10.0));
 }
@@ -247,9 +210,5 @@ int main(int argc, char** argv) {
   ros::Publisher disparity_publisher =
       node_handle.advertise<stereo_msgs::DisparityImage>(settings.disparity_topic, 2);
   occupancy_fusion::g_disparity_publisher = &disparity_publisher;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  return result;
+  return occupancy_fusion::runTestsWhileSpinning();
 }

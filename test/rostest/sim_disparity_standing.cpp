@@ -4,8 +4,6 @@
 // map after every published update, reports the frames needed, and checks the final occupied
 // voxels against the room scene's analytic surfaces.
 #include <cmath>
-#include <functional>
-#include <map>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -15,9 +13,9 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <sensor_msgs/point_cloud2_iterator.h>
 
 #include "occupancy_fusion/sim/scenes.h"
+#include "rostest_support.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -53,15 +51,14 @@ class MapRecorder {
  private:
   void onCloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
     Snapshot snapshot;
-    sensor_msgs::PointCloud2ConstIterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z");
-    for (; x != x.end(); ++x, ++y, ++z) snapshot.centres.emplace_back(*x, *y, *z);
+    snapshot.centres = cloudPoints(*cloud);
     std::lock_guard<std::mutex> lock(mutex_);
     snapshot.images = integrated_;
     snapshots_.push_back(std::move(snapshot));
   }
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
     for (const auto& status : array->status) {
-      if (status.name.find("disparity mapping") == std::string::npos) continue;
+      if (!isTask(status, "disparity mapping")) continue;
       for (const auto& entry : status.values) {
         if (entry.key != "images integrated") continue;
         std::lock_guard<std::mutex> lock(mutex_);
@@ -79,22 +76,10 @@ class MapRecorder {
 Settings g_settings;
 MapRecorder* g_recorder = nullptr;
 
-bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
-  while (ros::ok() && ros::WallTime::now() < deadline) {
-    if (condition()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return condition();
-}
-
 // Voxels whose centre lies within a voxel diagonal (a surface crossing the voxel) plus the depth
 // noise at 1.6 m (sigma_z = 0.3 px / (0.12 m * 262.4 px) * (1.6 m)^2 = 0.024 m) of a surface.
 std::size_t nearSurface(const sim::Scene& scene, const std::vector<Eigen::Vector3d>& centres) {
-  const double tolerance = std::sqrt(3.0) * g_settings.resolution + 0.05;
-  std::size_t near = 0;
-  for (const Eigen::Vector3d& c : centres) near += scene.distanceToSurface(c) <= tolerance;
-  return near;
+  return countNearSurface(centres, scene, std::sqrt(3.0) * g_settings.resolution + 0.05);
 }
 
 TEST(SimDisparityStanding, VisibilityMethodMapsTheVisibleSurfacesAfterEnoughFrames) {
@@ -147,9 +132,5 @@ int main(int argc, char** argv) {
   private_node_handle.param("min_occupied", settings.min_occupied, settings.min_occupied);
   occupancy_fusion::MapRecorder recorder(node_handle);
   occupancy_fusion::g_recorder = &recorder;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  return result;
+  return occupancy_fusion::runTestsWhileSpinning();
 }

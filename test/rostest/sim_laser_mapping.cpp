@@ -3,7 +3,6 @@
 // and the shared map's 2D layer (through the MapServer's projected_map). Then sends bad scans and
 // checks that they are rejected and leave the map as it was, and that the mapper keeps mapping.
 #include <cmath>
-#include <functional>
 #include <mutex>
 #include <string>
 
@@ -13,12 +12,12 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
-#include <std_srvs/SetBool.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
 #include "occupancy_fusion/sim/scenes.h"
+#include "rostest_support.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -56,24 +55,13 @@ class Observer {
     state_.projected = grid;
     ++state_.projected_count;
   }
-  static std::size_t valueOf(const diagnostic_msgs::DiagnosticStatus& status,
-                             const std::string& key) {
-    for (const auto& entry : status.values) {
-      if (entry.key == key) return std::stoul(entry.value);
-    }
-    return 0;
-  }
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string suffix = "laser mapping";
     for (const auto& status : array->status) {
-      if (status.name.size() < suffix.size() ||
-          status.name.compare(status.name.size() - suffix.size(), suffix.size(), suffix) != 0) {
-        continue;
-      }
-      state_.front_integrated = valueOf(status, "front scans integrated");
-      state_.rear_integrated = valueOf(status, "rear scans integrated");
-      state_.front_rejected = valueOf(status, "front scans rejected");
+      if (!isTask(status, "laser mapping")) continue;
+      state_.front_integrated = diagnosticCount(status, "front scans integrated");
+      state_.rear_integrated = diagnosticCount(status, "rear scans integrated");
+      state_.front_rejected = diagnosticCount(status, "front scans rejected");
     }
   }
 
@@ -85,38 +73,6 @@ class Observer {
 Settings g_settings;
 Observer* g_observer = nullptr;
 tf2_ros::Buffer* g_tf = nullptr;
-
-bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
-  while (ros::ok() && ros::WallTime::now() < deadline) {
-    if (condition()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return condition();
-}
-
-bool setPaused(bool paused) {
-  std_srvs::SetBool pause;
-  pause.request.data = paused;
-  return ros::service::call("/simulator/pause", pause);
-}
-
-Eigen::Vector2d cellCentre(const nav_msgs::OccupancyGrid& grid, int x, int y) {
-  return {grid.info.origin.position.x + (x + 0.5) * grid.info.resolution,
-          grid.info.origin.position.y + (y + 0.5) * grid.info.resolution};
-}
-
-std::int8_t cellAt(const nav_msgs::OccupancyGrid& grid, double px, double py) {
-  const int x =
-      static_cast<int>(std::floor((px - grid.info.origin.position.x) / grid.info.resolution));
-  const int y =
-      static_cast<int>(std::floor((py - grid.info.origin.position.y) / grid.info.resolution));
-  if (x < 0 || y < 0 || x >= static_cast<int>(grid.info.width) ||
-      y >= static_cast<int>(grid.info.height)) {
-    return -1;
-  }
-  return grid.data[static_cast<std::size_t>(x + grid.info.width * y)];
-}
 
 // Occupied cells lie within `tolerance` of a true surface in the scan plane; free cells' centres
 // are free in the scene. Cells of the grid are mapped into the world by world_T_grid.
@@ -169,7 +125,7 @@ TEST(SimLaserMapping, BothProductsMatchGroundTruth) {
       60.0))
       << "front " << g_observer->state().front_integrated << ", rear "
       << g_observer->state().rear_integrated << " scans integrated";
-  ASSERT_TRUE(setPaused(true));
+  ASSERT_TRUE(setSimulatorPaused(true));
   // Scans in flight are integrated and published; then both products stay as they are (the
   // local grid is re-fused from the same latest scans).
   ros::WallDuration(2.0).sleep();
@@ -286,7 +242,7 @@ TEST(SimLaserMapping, BadScansAreRejectedAndLeaveTheMapUnchanged) {
   EXPECT_EQ(after.projected->data, g_frozen.projected->data);
 
   // The mapper is still running: it maps again once the robot moves.
-  ASSERT_TRUE(setPaused(false));
+  ASSERT_TRUE(setSimulatorPaused(false));
   EXPECT_TRUE(waitUntil(
       [&] { return g_observer->state().front_integrated >= after.front_integrated + 5; }, 10.0));
 }
@@ -307,9 +263,5 @@ int main(int argc, char** argv) {
   occupancy_fusion::g_tf = &tf_buffer;
   occupancy_fusion::Observer observer(node_handle);
   occupancy_fusion::g_observer = &observer;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  return result;
+  return occupancy_fusion::runTestsWhileSpinning();
 }

@@ -2,11 +2,9 @@
 // depth camera in the room scene, against the scene's analytic ground truth; then the services.
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <mutex>
 #include <sstream>
 #include <string>
@@ -20,14 +18,13 @@
 #include <octomap/OcTree.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <sensor_msgs/point_cloud2_iterator.h>
 #include <std_srvs/Empty.h>
-#include <std_srvs/SetBool.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include "occupancy_fusion/BoundingBoxQuery.h"
 #include "occupancy_fusion/SaveMap.h"
 #include "occupancy_fusion/sim/scenes.h"
+#include "rostest_support.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -88,27 +85,16 @@ class MapObserver {
     snapshot_.cloud = cloud;
     snapshot_.cloud_time = ros::WallTime::now();
   }
-  static std::string valueOf(const diagnostic_msgs::DiagnosticStatus& status,
-                             const std::string& key) {
-    for (const auto& entry : status.values) {
-      if (entry.key == key) return entry.value;
-    }
-    return "";
-  }
-  static bool endsWith(const std::string& text, const std::string& suffix) {
-    return text.size() >= suffix.size() &&
-           text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
-  }
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& status : array->status) {
-      if (endsWith(status.name, "point cloud mapping")) {
-        clouds_integrated_ = std::stoul(valueOf(status, "clouds integrated"));
+      if (isTask(status, "point cloud mapping")) {
+        clouds_integrated_ = std::stoul(diagnosticValue(status, "clouds integrated"));
       }
-      if (endsWith(status.name, "map publishing")) {
-        const std::size_t refreshed = std::stoul(valueOf(status, "cache blocks refreshed"));
-        const std::size_t blocks = std::stoul(valueOf(status, "map blocks"));
-        const bool full = valueOf(status, "cache full rebuild") == "True";
+      if (isTask(status, "map publishing")) {
+        const std::size_t refreshed = std::stoul(diagnosticValue(status, "cache blocks refreshed"));
+        const std::size_t blocks = std::stoul(diagnosticValue(status, "map blocks"));
+        const bool full = diagnosticValue(status, "cache full rebuild") == "True";
         // A cycle that re-read some, but not all, blocks: cost followed the change.
         if (!full && refreshed > 0 && refreshed < blocks) saw_incremental_refresh_ = true;
       }
@@ -125,15 +111,6 @@ class MapObserver {
 Settings g_settings;
 MapObserver* g_observer = nullptr;
 
-bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
-  while (ros::ok() && ros::WallTime::now() < deadline) {
-    if (condition()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return condition();
-}
-
 // Waits for a snapshot whose three outputs all arrived after `since`.
 MapObserver::Snapshot snapshotAfter(const ros::WallTime& since, double timeout_seconds) {
   waitUntil(
@@ -146,11 +123,14 @@ MapObserver::Snapshot snapshotAfter(const ros::WallTime& since, double timeout_s
   return g_observer->snapshot();
 }
 
-std::vector<Point> cloudPoints(const sensor_msgs::PointCloud2& cloud) {
-  std::vector<Point> points;
-  sensor_msgs::PointCloud2ConstIterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
-  for (; x != x.end(); ++x, ++y, ++z) points.push_back({*x, *y, *z});
-  return points;
+// Back to the cloud's own floats (exactly), so that equal voxel centres compare equal.
+std::vector<Point> asFloats(const std::vector<Eigen::Vector3d>& points) {
+  std::vector<Point> floats;
+  for (const Eigen::Vector3d& p : points) {
+    floats.push_back(
+        {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+  }
+  return floats;
 }
 
 std::vector<Point> markerPoints(const visualization_msgs::Marker& marker) {
@@ -161,39 +141,10 @@ std::vector<Point> markerPoints(const visualization_msgs::Marker& marker) {
   return points;
 }
 
-Eigen::Vector3d toVector(const Point& p) { return {p[0], p[1], p[2]}; }
-
-double fractionNearSurface(const std::vector<Point>& points, const sim::Scene& scene,
-                           double tolerance) {
-  std::size_t near = 0;
-  for (const Point& p : points) near += scene.distanceToSurface(toVector(p)) <= tolerance ? 1 : 0;
-  return points.empty() ? 0.0 : static_cast<double>(near) / points.size();
-}
-
-Eigen::Vector2d cellCentre(const nav_msgs::OccupancyGrid& grid, int x, int y) {
-  return {grid.info.origin.position.x + (x + 0.5) * grid.info.resolution,
-          grid.info.origin.position.y + (y + 0.5) * grid.info.resolution};
-}
-
-std::int8_t cellAt(const nav_msgs::OccupancyGrid& grid, double px, double py) {
-  const int x =
-      static_cast<int>(std::floor((px - grid.info.origin.position.x) / grid.info.resolution));
-  const int y =
-      static_cast<int>(std::floor((py - grid.info.origin.position.y) / grid.info.resolution));
-  if (x < 0 || y < 0 || x >= static_cast<int>(grid.info.width) ||
-      y >= static_cast<int>(grid.info.height)) {
-    return -1;
-  }
-  return grid.data[static_cast<std::size_t>(x + grid.info.width * y)];
-}
-
 // Whether the vertical segment over (x, y) within the height band meets a solid.
-bool columnHitsSolid(const sim::Scene& scene, const Eigen::Vector2d& xy) {
-  const double step = 0.5 * g_settings.resolution;
-  for (double z = g_settings.min_z; z <= g_settings.max_z; z += step) {
-    if (scene.isOccupied({xy.x(), xy.y(), z})) return true;
-  }
-  return false;
+bool bandHitsSolid(const sim::Scene& scene, const Eigen::Vector2d& xy) {
+  return columnHitsSolid(scene, xy, g_settings.min_z, g_settings.max_z,
+                         0.5 * g_settings.resolution);
 }
 
 // Whether the columns over the cell's centre and its four corners all meet a solid: the cell lies
@@ -203,7 +154,7 @@ bool cellUnderSolid(const sim::Scene& scene, const Eigen::Vector2d& centre) {
   for (const Eigen::Vector2d& offset :
        {Eigen::Vector2d(0, 0), Eigen::Vector2d(-half, -half), Eigen::Vector2d(half, -half),
         Eigen::Vector2d(-half, half), Eigen::Vector2d(half, half)}) {
-    if (!columnHitsSolid(scene, centre + offset)) return false;
+    if (!bandHitsSolid(scene, centre + offset)) return false;
   }
   return true;
 }
@@ -218,10 +169,9 @@ bool topSurfaceVisible(const Eigen::Vector2d& xy) {
   return in_table || in_walls;
 }
 
-std::size_t countInBox(const std::vector<Point>& points, const Eigen::Vector3d& min,
+std::size_t countInBox(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& min,
                        const Eigen::Vector3d& max) {
-  return std::count_if(points.begin(), points.end(), [&](const Point& p) {
-    const Eigen::Vector3d v = toVector(p);
+  return std::count_if(points.begin(), points.end(), [&](const Eigen::Vector3d& v) {
     return (v.array() >= min.array()).all() && (v.array() <= max.array()).all();
   });
 }
@@ -253,9 +203,7 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
       },
       60.0))
       << "only " << g_observer->cloudsIntegrated() << " clouds integrated";
-  std_srvs::SetBool pause;
-  pause.request.data = true;
-  ASSERT_TRUE(ros::service::call("/simulator/pause", pause));
+  ASSERT_TRUE(setSimulatorPaused(true));
   // Let clouds in flight be integrated and published; then the map stays as it is.
   ros::WallDuration(1.5).sleep();
   g_final = g_observer->snapshot();
@@ -265,7 +213,7 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
   const double voxel_diagonal = std::sqrt(3.0) * g_settings.resolution;
 
   // Occupied voxel centres lie on the scene's surfaces.
-  const std::vector<Point> centres = cloudPoints(*g_final.cloud);
+  const std::vector<Eigen::Vector3d> centres = cloudPoints(*g_final.cloud);
   EXPECT_EQ(g_final.cloud->header.frame_id, "map");
   const double near_surface = fractionNearSurface(centres, scene, voxel_diagonal);
   ROS_INFO("%zu occupied voxels, %.2f %% within a voxel diagonal of a surface", centres.size(),
@@ -281,7 +229,7 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
   EXPECT_NEAR(cubes.scale.x, g_settings.resolution, 1e-9);
   EXPECT_EQ(cubes.colors.size(), cubes.points.size());
   std::vector<Point> marker_centres = markerPoints(cubes);
-  std::vector<Point> sorted_centres = centres;
+  std::vector<Point> sorted_centres = asFloats(centres);
   std::sort(marker_centres.begin(), marker_centres.end());
   std::sort(sorted_centres.begin(), sorted_centres.end());
   EXPECT_EQ(marker_centres, sorted_centres);
@@ -298,7 +246,7 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
       const Eigen::Vector2d centre = cellCentre(grid, x, y);
       if (value == 0) {
         ++free_cells;
-        free_correct += columnHitsSolid(scene, centre) ? 0 : 1;
+        free_correct += bandHitsSolid(scene, centre) ? 0 : 1;
       }
       if (cellUnderSolid(scene, centre) && topSurfaceVisible(centre)) {
         ++solid_cells;
@@ -387,7 +335,7 @@ TEST(SimPointCloudMapping, SaveMapWritesReadableFiles) {
 
 TEST(SimPointCloudMapping, ClearBoxEmptiesTheBox) {
   ASSERT_TRUE(g_final.cloud);
-  const std::vector<Point> before = cloudPoints(*g_final.cloud);
+  const std::vector<Eigen::Vector3d> before = cloudPoints(*g_final.cloud);
   // Around the table, floor under it included.
   BoundingBoxQuery clear;
   clear.request.min.x = 0.6;
@@ -403,7 +351,7 @@ TEST(SimPointCloudMapping, ClearBoxEmptiesTheBox) {
   ASSERT_TRUE(ros::service::call("/map_server/clear_bbx", clear));
   const MapObserver::Snapshot after = snapshotAfter(call_time, 5.0);
   ASSERT_GT(after.cloud_time, call_time);
-  const std::vector<Point> remaining = cloudPoints(*after.cloud);
+  const std::vector<Eigen::Vector3d> remaining = cloudPoints(*after.cloud);
   EXPECT_EQ(countInBox(remaining, min, max), 0u);
   EXPECT_EQ(remaining.size(), before.size() - inside_before);
   // Cleared voxels become free (octomap_server's semantics), so the table cell turns free.
@@ -439,9 +387,5 @@ int main(int argc, char** argv) {
   private_node_handle.param("occupancy_max_z", settings.max_z, settings.max_z);
   occupancy_fusion::MapObserver observer(node_handle);
   occupancy_fusion::g_observer = &observer;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  return result;
+  return occupancy_fusion::runTestsWhileSpinning();
 }

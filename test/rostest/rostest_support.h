@@ -1,0 +1,129 @@
+// Helpers shared by the rostests' test nodes: waiting, pausing the Simulator, reading published
+// clouds, grids and diagnostics, and checking them against a scene's analytic ground truth.
+// Header-only: every test/rostest/<name>.cpp is its own executable.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <std_srvs/SetBool.h>
+#include <Eigen/Core>
+
+#include "occupancy_fusion/sim/scenes.h"
+
+namespace occupancy_fusion {
+
+// Polls `condition` every 50 ms (wall time) until it holds or the timeout passes; its last value.
+inline bool waitUntil(const std::function<bool()>& condition, double timeout_seconds) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_seconds);
+  while (ros::ok() && ros::WallTime::now() < deadline) {
+    if (condition()) return true;
+    ros::WallDuration(0.05).sleep();
+  }
+  return condition();
+}
+
+// Stops (true) or resumes (false) the Simulator's robot and sensors through /simulator/pause.
+inline bool setSimulatorPaused(bool paused) {
+  std_srvs::SetBool pause;
+  pause.request.data = paused;
+  return ros::service::call("/simulator/pause", pause) && pause.response.success;
+}
+
+// Runs the tests while two threads serve the test node's subscriptions.
+inline int runTestsWhileSpinning() {
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  spinner.stop();
+  return result;
+}
+
+// x, y, z of every point of a cloud of FLOAT32 coordinates (the MapServer's voxel centres).
+inline std::vector<Eigen::Vector3d> cloudPoints(const sensor_msgs::PointCloud2& cloud) {
+  std::vector<Eigen::Vector3d> points;
+  sensor_msgs::PointCloud2ConstIterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (; x != x.end(); ++x, ++y, ++z) points.emplace_back(*x, *y, *z);
+  return points;
+}
+
+// How many of the points lie within `tolerance` of one of the scene's surfaces.
+inline std::size_t countNearSurface(const std::vector<Eigen::Vector3d>& points,
+                                    const sim::Scene& scene, double tolerance) {
+  std::size_t near = 0;
+  for (const Eigen::Vector3d& p : points) near += scene.distanceToSurface(p) <= tolerance ? 1 : 0;
+  return near;
+}
+
+// The same as a fraction of the points; 0 without points.
+inline double fractionNearSurface(const std::vector<Eigen::Vector3d>& points,
+                                  const sim::Scene& scene, double tolerance) {
+  return points.empty()
+             ? 0.0
+             : static_cast<double>(countNearSurface(points, scene, tolerance)) / points.size();
+}
+
+inline Eigen::Vector2d cellCentre(const nav_msgs::OccupancyGrid& grid, int x, int y) {
+  return {grid.info.origin.position.x + (x + 0.5) * grid.info.resolution,
+          grid.info.origin.position.y + (y + 0.5) * grid.info.resolution};
+}
+
+// The grid's value at a point of its frame's plane; -1 (unknown) outside the grid.
+inline std::int8_t cellAt(const nav_msgs::OccupancyGrid& grid, double px, double py) {
+  const int x =
+      static_cast<int>(std::floor((px - grid.info.origin.position.x) / grid.info.resolution));
+  const int y =
+      static_cast<int>(std::floor((py - grid.info.origin.position.y) / grid.info.resolution));
+  if (x < 0 || y < 0 || x >= static_cast<int>(grid.info.width) ||
+      y >= static_cast<int>(grid.info.height)) {
+    return -1;
+  }
+  return grid.data[static_cast<std::size_t>(x + grid.info.width * y)];
+}
+
+// Whether the vertical segment over (x, y) from min_z to max_z, sampled every `step`, meets a
+// solid.
+inline bool columnHitsSolid(const sim::Scene& scene, const Eigen::Vector2d& xy, double min_z,
+                            double max_z, double step) {
+  for (double z = min_z; z <= max_z; z += step) {
+    if (scene.isOccupied({xy.x(), xy.y(), z})) return true;
+  }
+  return false;
+}
+
+// Whether a /diagnostics status is the task `task` ("<node>: <task>").
+inline bool isTask(const diagnostic_msgs::DiagnosticStatus& status, const std::string& task) {
+  const std::string& name = status.name;
+  return name.size() >= task.size() &&
+         name.compare(name.size() - task.size(), task.size(), task) == 0;
+}
+
+// The value of `key` in a status; "" when it has none.
+inline std::string diagnosticValue(const diagnostic_msgs::DiagnosticStatus& status,
+                                   const std::string& key) {
+  for (const auto& entry : status.values) {
+    if (entry.key == key) return entry.value;
+  }
+  return "";
+}
+
+// The value of `key` in a status as a count; 0 when it has none.
+inline std::size_t diagnosticCount(const diagnostic_msgs::DiagnosticStatus& status,
+                                   const std::string& key) {
+  for (const auto& entry : status.values) {
+    if (entry.key == key) return std::stoul(entry.value);
+  }
+  return 0;
+}
+
+}  // namespace occupancy_fusion
