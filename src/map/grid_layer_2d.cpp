@@ -64,7 +64,7 @@ void GridLayer2D::markWritten(std::uint64_t key, GridTile* tile) {
   // One log entry per tile and write call: the tile's version says whether it has one.
   if (tile->version == version_) return;
   tile->version = version_;
-  change_log_.push_back({version_, key, false});
+  change_log_.recordChange(version_, key);
 }
 
 GridTile& GridLayer2D::tileForWrite(const TileIndex& tile) {
@@ -77,10 +77,7 @@ GridTile& GridLayer2D::tileForWrite(const TileIndex& tile) {
 }
 
 void GridLayer2D::finishWrite() {
-  while (change_log_.size() > kMaxChangeLog) {
-    change_log_start_ = change_log_.front().version + 1;
-    change_log_.pop_front();
-  }
+  change_log_.finishWrite();
   ++version_;
 }
 
@@ -184,9 +181,8 @@ std::size_t GridLayer2D::clearBox(const Eigen::Vector2d& min, const Eigen::Vecto
 void GridLayer2D::reset() {
   std::unique_lock<std::shared_mutex> lock(mutex_);
   tiles_.clear();
-  change_log_.clear();
   // Consumers holding older versions must rebuild from scratch.
-  change_log_start_ = version_ + 1;
+  change_log_.clear(version_ + 1);
   ++version_;
 }
 
@@ -287,15 +283,12 @@ GridChanges GridLayer2D::changesSince(std::uint64_t version) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   GridChanges changes;
   changes.version = version_;
-  if (version < change_log_start_) {
+  std::vector<std::uint64_t> changed;
+  if (!change_log_.collectSince(version, &changed, nullptr)) {
     changes.full_rebuild = true;
     return changes;
   }
-  auto first =
-      std::lower_bound(change_log_.begin(), change_log_.end(), version,
-                       [](const ChangeEntry& entry, std::uint64_t v) { return entry.version < v; });
-  for (auto it = first; it != change_log_.end(); ++it)
-    changes.changed.push_back(unpackKey2(it->key));
+  for (std::uint64_t key : changed) changes.changed.push_back(unpackKey2(key));
   return changes;
 }
 
@@ -319,7 +312,7 @@ std::size_t GridLayer2D::knownCellCount() const {
 std::size_t GridLayer2D::memoryBytes() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   return tiles_.size() * sizeof(GridTile) + tiles_.bucket_count() * kTableSlotBytes +
-         change_log_.size() * sizeof(ChangeEntry);
+         change_log_.memoryBytes();
 }
 
 }  // namespace occupancy_fusion

@@ -76,16 +76,13 @@ VoxelBlock& VoxelMap::blockForWrite(const BlockIndex& block) {
   return result;
 }
 
-void VoxelMap::markChanged(std::uint64_t key) { change_log_.push_back({version_, key, false}); }
+void VoxelMap::markChanged(std::uint64_t key) { change_log_.recordChange(version_, key); }
 
-void VoxelMap::markRemoved(std::uint64_t key) { change_log_.push_back({version_, key, true}); }
+void VoxelMap::markRemoved(std::uint64_t key) { change_log_.recordRemoval(version_, key); }
 
 void VoxelMap::finishWrite() {
   enforceMemoryBound();
-  while (change_log_.size() > kMaxChangeLog) {
-    change_log_start_ = change_log_.front().version + 1;
-    change_log_.pop_front();
-  }
+  change_log_.finishWrite();
   ++version_;
 }
 
@@ -178,9 +175,8 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
 void VoxelMap::reset() {
   std::unique_lock<std::shared_mutex> lock(mutex_);
   blocks_.clear();
-  change_log_.clear();
   // Consumers holding older versions must rebuild from scratch.
-  change_log_start_ = version_ + 1;
+  change_log_.clear(version_ + 1);
   ++version_;
 }
 
@@ -190,7 +186,7 @@ void VoxelMap::setFocus(const Eigen::Vector3d& sensor_origin) {
 }
 
 void VoxelMap::enforceMemoryBound() {
-  // The bound covers the voxel storage; the change log has its own fixed cap (kMaxChangeLog).
+  // The bound covers the voxel storage; the change log holds about one entry per block.
   if (config_.max_memory_bytes == 0 || storageBytesLocked() <= config_.max_memory_bytes) return;
   const Eigen::Vector3d focus_in_blocks = focus_ / (config_.resolution * VoxelBlock::kSide);
   std::vector<std::pair<double, std::uint64_t>> by_distance;
@@ -308,17 +304,13 @@ MapChanges VoxelMap::changesSince(std::uint64_t version) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   MapChanges changes;
   changes.version = version_;
-  if (version < change_log_start_) {
+  std::vector<std::uint64_t> changed, removed;
+  if (!change_log_.collectSince(version, &changed, &removed)) {
     changes.full_rebuild = true;
     return changes;
   }
-  // The log is in version order: binary search for the first entry at or after `version`.
-  auto first =
-      std::lower_bound(change_log_.begin(), change_log_.end(), version,
-                       [](const ChangeEntry& entry, std::uint64_t v) { return entry.version < v; });
-  for (auto it = first; it != change_log_.end(); ++it) {
-    (it->removed ? changes.removed : changes.changed).push_back(unpackKey3(it->key));
-  }
+  for (std::uint64_t key : changed) changes.changed.push_back(unpackKey3(key));
+  for (std::uint64_t key : removed) changes.removed.push_back(unpackKey3(key));
   return changes;
 }
 
@@ -344,7 +336,7 @@ std::size_t VoxelMap::storageBytesLocked() const {
 }
 
 std::size_t VoxelMap::memoryBytesLocked() const {
-  return storageBytesLocked() + change_log_.size() * sizeof(ChangeEntry);
+  return storageBytesLocked() + change_log_.memoryBytes();
 }
 
 std::size_t VoxelMap::memoryBytes() const {

@@ -15,6 +15,7 @@
 #include <shared_mutex>
 #include <vector>
 
+#include "occupancy_fusion/map/block_change_log.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
 
@@ -180,14 +181,7 @@ class GridLayer2D {
   mutable std::shared_mutex mutex_;
   TileTable tiles_;
   std::uint64_t version_ = 1;
-  struct ChangeEntry {
-    std::uint64_t version;
-    std::uint64_t key;
-    bool removed;
-  };
-  std::deque<ChangeEntry> change_log_;  // in version order
-  std::uint64_t change_log_start_ = 1;  // versions before this are no longer in the log
-  static constexpr std::size_t kMaxChangeLog = 1 << 18;
+  BlockChangeLog change_log_;
 };
 
 }  // namespace occupancy_fusion

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "occupancy_fusion/map/block_change_log.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
 
@@ -82,7 +83,7 @@ struct VoxelUpdate {
 struct MapChanges {
   std::uint64_t version = 0;        // pass this to the next changesSince()
   bool full_rebuild = false;        // the log no longer reaches back: rebuild from scratch
-  std::vector<BlockIndex> changed;  // written since (may include blocks removed later)
+  std::vector<BlockIndex> changed;  // written since, and still allocated
   std::vector<BlockIndex> removed;  // cleared, evicted or reset since
 };
 
@@ -192,15 +193,7 @@ class VoxelMap {
   Eigen::Vector3d focus_ = Eigen::Vector3d::Zero();
   std::uint64_t version_ = 1;
   std::size_t evicted_blocks_ = 0;
-  // (version, packed block key, removed?) in version order; trimmed to kMaxChangeLog entries.
-  struct ChangeEntry {
-    std::uint64_t version;
-    std::uint64_t key;
-    bool removed;
-  };
-  std::deque<ChangeEntry> change_log_;
-  std::uint64_t change_log_start_ = 1;  // versions before this are no longer in the log
-  static constexpr std::size_t kMaxChangeLog = 1 << 20;
+  BlockChangeLog change_log_;
 };
 
 }  // namespace occupancy_fusion

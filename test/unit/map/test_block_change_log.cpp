@@ -1,0 +1,99 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <random>
+#include <set>
+
+#include "occupancy_fusion/map/block_change_log.h"
+#include "occupancy_fusion/map/voxel_map.h"
+
+namespace occupancy_fusion {
+namespace {
+
+struct Recorded {
+  std::uint64_t version;
+  std::uint64_t key;
+  bool removed;
+};
+
+// What a consumer at `since` must hear of, from the full, never compacted history: every key
+// with an entry at or after `since`, classified by its newest entry.
+void bruteForce(const std::vector<Recorded>& history, std::uint64_t since,
+                std::set<std::uint64_t>* changed, std::set<std::uint64_t>* removed) {
+  std::map<std::uint64_t, bool> newest_removed;
+  for (const Recorded& entry : history) {
+    if (entry.version >= since) newest_removed[entry.key] = entry.removed;
+  }
+  for (const auto& [key, was_removed] : newest_removed) {
+    (was_removed ? removed : changed)->insert(key);
+  }
+}
+
+TEST(BlockChangeLog, CompactedLogAnswersLikeTheFullHistory) {
+  BlockChangeLog log;
+  std::vector<Recorded> history;
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::uint64_t> key(0, 300);
+  std::uniform_int_distribution<int> percent(0, 99);
+  std::uint64_t version = 1;
+  for (int write = 0; write < 20000; ++write, ++version) {
+    const int entries = 1 + percent(rng) % 8;
+    for (int i = 0; i < entries; ++i) {
+      const bool removed = percent(rng) < 10;
+      const std::uint64_t k = key(rng);
+      removed ? log.recordRemoval(version, k) : log.recordChange(version, k);
+      history.push_back({version, k, removed});
+    }
+    log.finishWrite();
+    if (write % 997 == 0) {
+      for (std::uint64_t since :
+           {std::uint64_t{1}, std::max<std::uint64_t>(1, version / 2), version, version + 1}) {
+        std::vector<std::uint64_t> changed, removed;
+        ASSERT_TRUE(log.collectSince(since, &changed, &removed));
+        std::set<std::uint64_t> want_changed, want_removed;
+        bruteForce(history, since, &want_changed, &want_removed);
+        EXPECT_EQ(std::set<std::uint64_t>(changed.begin(), changed.end()), want_changed);
+        EXPECT_EQ(std::set<std::uint64_t>(removed.begin(), removed.end()), want_removed);
+        EXPECT_EQ(changed.size() + removed.size(), want_changed.size() + want_removed.size())
+            << "a key listed twice";
+      }
+    }
+  }
+  // 90 000 entries were recorded over 301 keys; the log keeps about one per key.
+  EXPECT_GT(history.size(), 80000u);
+  EXPECT_LE(log.size(), 2 * 4096u);
+}
+
+TEST(BlockChangeLog, ClearMakesOlderConsumersRebuild) {
+  BlockChangeLog log;
+  log.recordChange(1, 7);
+  log.finishWrite();
+  log.clear(3);
+  std::vector<std::uint64_t> changed;
+  EXPECT_FALSE(log.collectSince(2, &changed, nullptr));
+  EXPECT_TRUE(log.collectSince(3, &changed, nullptr));
+  EXPECT_TRUE(changed.empty());
+}
+
+TEST(VoxelMap, MemoryDoesNotGrowWithRepeatedWritesToTheSameBlocks) {
+  VoxelMapConfig config;
+  config.resolution = 0.1;
+  VoxelMap map(config);
+  auto write_frames = [&](int frames) {
+    for (int frame = 0; frame < frames; ++frame) {
+      std::vector<VoxelUpdate> updates;
+      for (int block = 0; block < 16; ++block) updates.push_back({{block * 8, 0, 0}, 0.0f});
+      map.applyUpdates(updates);
+    }
+  };
+  write_frames(1000);
+  const std::size_t after_1000 = map.memoryBytes();
+  write_frames(20000);
+  EXPECT_LE(map.memoryBytes(), after_1000);
+  EXPECT_LT(map.memoryBytes(),
+            16 * sizeof(VoxelBlock) + 2 * 4096 * sizeof(BlockChangeLog::Entry) + (1u << 12));
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
