@@ -1,23 +1,9 @@
 #include "occupancy_fusion/sensors/depth_image.h"
 
-#include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace occupancy_fusion {
-
-void CameraIntrinsics::validate() const {
-  if (width <= 0) throw std::invalid_argument("CameraIntrinsics.width must be > 0");
-  if (height <= 0) throw std::invalid_argument("CameraIntrinsics.height must be > 0");
-  if (!(std::isfinite(fx) && fx > 0.0)) {
-    throw std::invalid_argument("CameraIntrinsics.fx must be finite and > 0");
-  }
-  if (!(std::isfinite(fy) && fy > 0.0)) {
-    throw std::invalid_argument("CameraIntrinsics.fy must be finite and > 0");
-  }
-  if (!std::isfinite(cx)) throw std::invalid_argument("CameraIntrinsics.cx must be finite");
-  if (!std::isfinite(cy)) throw std::invalid_argument("CameraIntrinsics.cy must be finite");
-}
 
 void DepthImageView::validateAgainst(const CameraIntrinsics& camera) const {
   if (depth == nullptr) throw std::invalid_argument("DepthImageView.depth is null");

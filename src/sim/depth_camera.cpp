@@ -3,33 +3,16 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <string>
 
 namespace occupancy_fusion {
 namespace sim {
 namespace {
-
-void requirePositive(double value, const char* field) {
-  if (!(std::isfinite(value) && value > 0)) {
-    throw std::invalid_argument(std::string("PinholeCamera.") + field +
-                                " must be positive and finite");
-  }
-}
 
 void requireMaxRange(double max_range) {
   if (!(max_range > 0)) throw std::invalid_argument("max_range must be positive");
 }
 
 }  // namespace
-
-void PinholeCamera::validate() const {
-  if (width <= 0) throw std::invalid_argument("PinholeCamera.width must be positive");
-  if (height <= 0) throw std::invalid_argument("PinholeCamera.height must be positive");
-  requirePositive(fx, "fx");
-  requirePositive(fy, "fy");
-  if (!std::isfinite(cx)) throw std::invalid_argument("PinholeCamera.cx must be finite");
-  if (!std::isfinite(cy)) throw std::invalid_argument("PinholeCamera.cy must be finite");
-}
 
 PinholeCamera pirkerSyntheticCamera() {
   PinholeCamera camera;

@@ -25,17 +25,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-CameraIntrinsics intrinsicsOf(const sim::PinholeCamera& camera) {
-  CameraIntrinsics intrinsics;
-  intrinsics.width = camera.width;
-  intrinsics.height = camera.height;
-  intrinsics.fx = camera.fx;
-  intrinsics.fy = camera.fy;
-  intrinsics.cx = camera.cx;
-  intrinsics.cy = camera.cy;
-  return intrinsics;
-}
-
 std::vector<std::string> splitList(const std::string& text) {
   std::vector<std::string> items;
   std::stringstream stream(text);
@@ -197,8 +186,7 @@ int runDepthAccuracy(const CommandLine& args) {
   config.sigma = args.doubleValue("sigma", 0.02);
   config.k = args.doubleValue("k", config.sigma);
   config.max_range = max_range;
-  const sim::PinholeCamera sim_camera = sim::pirkerSyntheticCamera();
-  const CameraIntrinsics camera = intrinsicsOf(sim_camera);
+  const CameraIntrinsics camera = sim::pirkerSyntheticCamera();
   std::printf(
       "# %d of the sweep's 181 views, %dx%d f=%g c=(%g, %g); resolution=%g k=%g sigma=%g "
       "threads=%d\n",
@@ -212,7 +200,7 @@ int runDepthAccuracy(const CommandLine& args) {
     const bool box = scene_name == "box";
     const sim::Scene scene = box ? sim::makeBoxScene() : sim::makeSpheresScene();
     const std::vector<View> views = renderViews(
-        scene, sim_camera, box ? sim::boxSceneCameraPosition() : sim::spheresSceneCameraPosition(),
+        scene, camera, box ? sim::boxSceneCameraPosition() : sim::spheresSceneCameraPosition(),
         view_count, max_range);
     for (const std::string& method : splitList(args.value("methods", "pyramid,andert,ideal"))) {
       config.method = depthMethodFromString(method);

@@ -4,28 +4,15 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "occupancy_fusion/sensors/camera_intrinsics.h"
 #include "occupancy_fusion/sim/scene.h"
 
 namespace occupancy_fusion {
 namespace sim {
 
-// Intrinsics in the ROS (sensor_msgs/CameraInfo) convention: pixel (u, v) has its centre at the
-// integer coordinates (u, v), u to the right, v down, and (cx, cy) is given in the same
-// coordinates. The ray of pixel (u, v) in the optical frame (z forward, x right, y down) is
-// ((u - cx) / fx, (v - cy) / fy, 1).
-struct PinholeCamera {
-  int width = 640;
-  int height = 480;
-  double fx = 525.0;  // px
-  double fy = 525.0;  // px
-  double cx = 319.5;  // px
-  double cy = 239.5;  // px
-
-  void validate() const;  // throws std::invalid_argument naming the bad field
-
-  // Direction of pixel (u, v) in the optical frame, with z component 1 (not unit length).
-  Eigen::Vector3d pixelRay(double u, double v) const { return {(u - cx) / fx, (v - cy) / fy, 1.0}; }
-};
+// The simulator's cameras use the sensors' pinhole intrinsics, so a rendered image feeds the
+// depth integrator directly. The ray of pixel (u, v) is ((u - cx) / fx, (v - cy) / fy, 1).
+using PinholeCamera = CameraIntrinsics;
 
 // The camera of the depth paper's synthetic experiments (Sec. 5.1): 400 x 400 pixels, focal
 // length 400 px, principal point (200, 200).

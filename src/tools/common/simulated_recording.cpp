@@ -54,17 +54,6 @@ std::vector<Eigen::Isometry3d> corridorPath(int frames) {
   return poses;
 }
 
-CameraIntrinsics intrinsicsOf(const sim::PinholeCamera& camera) {
-  CameraIntrinsics intrinsics;
-  intrinsics.width = camera.width;
-  intrinsics.height = camera.height;
-  intrinsics.fx = camera.fx;
-  intrinsics.fy = camera.fy;
-  intrinsics.cx = camera.cx;
-  intrinsics.cy = camera.cy;
-  return intrinsics;
-}
-
 // base_link -> link (the mount) -> optical frame (REP-103 rotation).
 std::vector<geometry_msgs::TransformStamped> cameraMount(const Eigen::Isometry3d& T_base_link,
                                                          const std::string& link_frame,
@@ -161,7 +150,7 @@ void DepthImageCameraSensor::writeFrame(const sim::Scene& scene,
   const sim::DepthImage depth =
       sim::renderDepth(scene, config_.camera, T_map_optical, config_.max_range);
   bag->write(config_.info_topic, stamp,
-             cameraInfoMessage(intrinsicsOf(config_.camera), config_.optical_frame, stamp));
+             cameraInfoMessage(config_.camera, config_.optical_frame, stamp));
   bag->write(config_.image_topic, stamp,
              depthImageMessage(depth.depth, depth.width, depth.height, config_.millimetres,
                                config_.optical_frame, stamp));
@@ -208,7 +197,7 @@ void DisparityCameraSensor::writeFrame(const sim::Scene& scene, const Eigen::Iso
     }
   }
   bag->write(config_.info_topic, stamp,
-             cameraInfoMessage(intrinsicsOf(config_.camera), config_.optical_frame, stamp));
+             cameraInfoMessage(config_.camera, config_.optical_frame, stamp));
   bag->write(config_.disparity_topic, stamp,
              disparityMessage(disparity, image.width, image.height, camera, config_.min_disparity,
                               config_.max_disparity, config_.optical_frame, stamp));

@@ -17,17 +17,6 @@ namespace {
 constexpr double kResolution = 0.1;
 constexpr double kMaxRange = 15.0;
 
-CameraIntrinsics intrinsicsOf(const sim::PinholeCamera& camera) {
-  CameraIntrinsics intrinsics;
-  intrinsics.width = camera.width;
-  intrinsics.height = camera.height;
-  intrinsics.fx = camera.fx;
-  intrinsics.fy = camera.fy;
-  intrinsics.cx = camera.cx;
-  intrinsics.cy = camera.cy;
-  return intrinsics;
-}
-
 struct Scores {
   double surface_covered = 0.0;  // visible true surface points within one voxel of an occupied
   double free_correct = 0.0;     // observed ground-truth free voxels labelled free
@@ -38,8 +27,7 @@ struct Scores {
 // Views 0, 4, 8, ... of the paper's 4-degree sweep, about the camera's x and then y axis.
 Scores mapBoxScene(DepthMethod method) {
   const sim::Scene scene = sim::makeBoxScene();
-  const sim::PinholeCamera sim_camera = sim::pirkerSyntheticCamera();
-  const CameraIntrinsics camera = intrinsicsOf(sim_camera);
+  const CameraIntrinsics camera = sim::pirkerSyntheticCamera();
   const std::vector<Eigen::Isometry3d> sweep = sim::rotationSweep(sim::boxSceneCameraPosition());
   std::vector<Eigen::Isometry3d> views;
   for (int k : {0, 3, 6, 9, 93, 96, 99}) views.push_back(sweep[k]);
@@ -55,7 +43,7 @@ Scores mapBoxScene(DepthMethod method) {
   VoxelMap map(map_config);
   std::vector<sim::DepthImage> images;
   for (const Eigen::Isometry3d& view : views) {
-    images.push_back(sim::renderDepth(scene, sim_camera, view, kMaxRange));
+    images.push_back(sim::renderDepth(scene, camera, view, kMaxRange));
     const DepthImageView depth{camera.width, camera.height, images.back().depth.data()};
     integrator.integrate(depth, camera, view, &map);
   }
