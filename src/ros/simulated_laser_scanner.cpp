@@ -11,28 +11,6 @@
 namespace occupancy_fusion {
 namespace {
 
-struct MountAngles {
-  double roll = 0.0, pitch = 0.0, yaw = 0.0;  // rad, applied as yaw * pitch * roll
-};
-
-Eigen::Isometry3d readMount(const ParameterSource& source, const std::string& prefix) {
-  Eigen::Vector3d position(0.0, 0.0, 0.3);  // a scanner 0.3 m above the base's origin
-  MountAngles angles;
-  source.get(prefix + "x", &position.x());
-  source.get(prefix + "y", &position.y());
-  source.get(prefix + "z", &position.z());
-  source.get(prefix + "roll", &angles.roll);
-  source.get(prefix + "pitch", &angles.pitch);
-  source.get(prefix + "yaw", &angles.yaw);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.translation() = position;
-  pose.linear() = (Eigen::AngleAxisd(angles.yaw, Eigen::Vector3d::UnitZ()) *
-                   Eigen::AngleAxisd(angles.pitch, Eigen::Vector3d::UnitY()) *
-                   Eigen::AngleAxisd(angles.roll, Eigen::Vector3d::UnitX()))
-                      .toRotationMatrix();
-  return pose;
-}
-
 void readScanner(const ParameterSource& source, const std::string& prefix,
                  sim::LaserScanner* scanner) {
   source.get(prefix + "angle_min", &scanner->angle_min);
@@ -86,7 +64,9 @@ SimulatedLaserScannerConfig readSimulatedLaserScannerConfig(const ParameterSourc
   source.get(prefix + "rate", &config.rate);
   source.get(prefix + "frame_id", &config.mount.frame);
   readScanner(source, prefix, &config.scanner);
-  config.mount.T_body_sensor = readMount(source, prefix);
+  Eigen::Isometry3d default_mount = Eigen::Isometry3d::Identity();
+  default_mount.translation() = Eigen::Vector3d(0.0, 0.0, 0.3);  // 0.3 m above the base's origin
+  config.mount.T_body_sensor = readMountPose(source, prefix, default_mount);
   config.validate();
   return config;
 }

@@ -17,6 +17,20 @@
 namespace occupancy_fusion {
 namespace {
 
+sensor_msgs::CameraInfo cameraInfo(const sim::PinholeCamera& camera) {
+  sensor_msgs::CameraInfo info;
+  info.width = static_cast<std::uint32_t>(camera.width);
+  info.height = static_cast<std::uint32_t>(camera.height);
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
+  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  info.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
+  return info;
+}
+
+}  // namespace
+
 Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string& prefix,
                                 const Eigen::Isometry3d& default_pose) {
   Eigen::Vector3d position = default_pose.translation();
@@ -36,20 +50,6 @@ Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string
                       .toRotationMatrix();
   return pose;
 }
-
-sensor_msgs::CameraInfo cameraInfo(const sim::PinholeCamera& camera) {
-  sensor_msgs::CameraInfo info;
-  info.width = static_cast<std::uint32_t>(camera.width);
-  info.height = static_cast<std::uint32_t>(camera.height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
-  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-  info.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
-  return info;
-}
-
-}  // namespace
 
 void SimulatedDepthCameraConfig::validate() const {
   if (name.empty()) throw std::invalid_argument("camera name must not be empty");

@@ -25,6 +25,11 @@ struct SensorMount {
   Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
 };
 
+// The mount pose under `prefix`: x, y, z (m) and roll, pitch, yaw (rad, applied as yaw * pitch *
+// roll) in the body frame; each key that is absent keeps default_pose's value.
+Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string& prefix,
+                                const Eigen::Isometry3d& default_pose);
+
 class SimulatedSensor {
  public:
   virtual ~SimulatedSensor() = default;
