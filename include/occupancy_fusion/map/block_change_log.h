@@ -53,7 +53,7 @@ class BlockChangeLog {
   std::deque<Entry> entries_;  // in version order
   std::uint64_t start_ = 1;    // versions before this are no longer fully in the log
   std::size_t compact_at_ = kMinCompactionSize;
-  static constexpr std::size_t kMinCompactionSize = 4096;
+  static constexpr std::size_t kMinCompactionSize = 256;
 };
 
 }  // namespace occupancy_fusion
