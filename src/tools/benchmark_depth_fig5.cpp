@@ -14,77 +14,13 @@
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/eval/depth_axis_profile.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
 namespace {
 
-constexpr double kResolution = 0.1;
-constexpr int kSide = 400;
-
-struct Profile {
-  std::vector<double> distance;
-  std::vector<std::optional<float>> log_odds;
-};
-
-// Pixels left of the edge see a wall at z-depth 6 m, the others one at 10 m. The edge lies
-// `edge_offset` pixels right of the optical axis (a multiple of 0.5: the edge runs between
-// pixel columns, so the principal point moves by half a pixel for half-integer offsets).
-Profile axisProfile(DepthMethod method, double edge_offset) {
-  const bool half = std::abs(edge_offset - std::round(edge_offset)) > 0.25;
-  CameraIntrinsics camera;
-  camera.width = camera.height = kSide;
-  camera.fx = camera.fy = 400.0;
-  camera.cx = half ? 199.0 : 199.5;
-  camera.cy = 199.5;
-  // The edge lies between pixel columns boundary - 1 and boundary, at boundary - 0.5.
-  const int boundary = static_cast<int>(std::lround(camera.cx + 0.5 + edge_offset));
-  std::vector<float> depth(kSide * kSide);
-  for (int v = 0; v < kSide; ++v) {
-    for (int u = 0; u < kSide; ++u) depth[v * kSide + u] = u < boundary ? 6.0f : 10.0f;
-  }
-  PyramidDepthConfig config;  // k = sigma = 0.6, the paper's values
-  config.method = method;
-  config.max_range = 20.0;
-  const PyramidDepthIntegrator integrator(config);
-  // The camera sits at the centre of a voxel column, so the axis voxels are centred on it.
-  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
-  T_map_camera.translation() = Eigen::Vector3d(0.05, 0.05, 0.0);
-  const DepthFrame frame =
-      integrator.prepare({kSide, kSide, depth.data()}, camera, T_map_camera, kResolution);
-  Profile profile;
-  for (int k = 1; k < 125; ++k) {  // voxel centres 0.15 ... 12.35 m
-    const Eigen::Vector3d center(0.05, 0.05, (k + 0.5) * kResolution);
-    profile.distance.push_back(center.z());
-    profile.log_odds.push_back(integrator.voxelLogOdds(frame, center));
-  }
-  return profile;
-}
-
-double probability(const std::optional<float>& log_odds) {  // Eq. 5; unknown reads as 0.5
-  return log_odds ? 1.0 / (1.0 + std::exp(-*log_odds)) : 0.5;
-}
-
-struct Errors {
-  double mean = 0.0;
-  double max = 0.0;
-};
-
-// Absolute occupancy-probability error against the ideal over the voxels the ideal observes.
-Errors errorsAgainst(const Profile& ideal, const Profile& method) {
-  Errors errors;
-  int count = 0;
-  for (std::size_t i = 0; i < ideal.log_odds.size(); ++i) {
-    if (!ideal.log_odds[i]) continue;
-    const double error = std::abs(probability(method.log_odds[i]) - probability(ideal.log_odds[i]));
-    errors.mean += error;
-    errors.max = std::max(errors.max, error);
-    ++count;
-  }
-  errors.mean /= std::max(count, 1);
-  return errors;
-}
+using Profile = AxisProfile;
 
 struct Curve {
   const Profile* profile;
@@ -126,7 +62,7 @@ cv::Mat plotProfiles(const std::vector<Curve>& curves) {
     const Profile& profile = *curves[c].profile;
     std::vector<cv::Point> points;
     for (std::size_t i = 0; i < profile.distance.size(); ++i) {
-      points.push_back(to_pixel(profile.distance[i], probability(profile.log_odds[i])));
+      points.push_back(to_pixel(profile.distance[i], profileProbability(profile.log_odds[i])));
     }
     cv::polylines(image, points, false, curves[c].color, curves[c].thickness, cv::LINE_AA);
     const cv::Point legend(left + 20, top + 25 + 25 * static_cast<int>(c));
@@ -142,19 +78,20 @@ cv::Mat plotProfiles(const std::vector<Curve>& curves) {
 
 int runDepthFig5(const CommandLine& args) {
   const std::string output = args.value("output", "");
-  const Profile ideal = axisProfile(DepthMethod::kIdeal, 0.0);
-  const Profile pyramid = axisProfile(DepthMethod::kPyramid, 0.0);
-  const Profile andert = axisProfile(DepthMethod::kAndert, 0.0);
+  const Profile ideal = fig5AxisProfile(DepthMethod::kIdeal, 0.0);
+  const Profile pyramid = fig5AxisProfile(DepthMethod::kPyramid, 0.0);
+  const Profile andert = fig5AxisProfile(DepthMethod::kAndert, 0.0);
   std::printf(
       "# Fig. 5: obstacles at 6 m (left of the edge) and 10 m, edge on the optical axis,\n"
       "# 400 x 400 px, f = 400, r = 0.1 m, k = sigma = 0.6; p = 0.5 where unknown\n");
   std::printf("# z[m]  ideal   pyramid andert\n");
   for (std::size_t i = 0; i < ideal.distance.size(); ++i) {
-    std::printf("%6.2f  %.4f  %.4f  %.4f\n", ideal.distance[i], probability(ideal.log_odds[i]),
-                probability(pyramid.log_odds[i]), probability(andert.log_odds[i]));
+    std::printf("%6.2f  %.4f  %.4f  %.4f\n", ideal.distance[i],
+                profileProbability(ideal.log_odds[i]), profileProbability(pyramid.log_odds[i]),
+                profileProbability(andert.log_odds[i]));
   }
-  const Errors pyramid_errors = errorsAgainst(ideal, pyramid);
-  const Errors andert_errors = errorsAgainst(ideal, andert);
+  const ProfileErrors pyramid_errors = errorsAgainstIdeal(ideal, pyramid);
+  const ProfileErrors andert_errors = errorsAgainstIdeal(ideal, andert);
   std::printf("depth-fig5 method=pyramid edge_offset_px=0 mean_abs_error=%.4f max_abs_error=%.4f\n",
               pyramid_errors.mean, pyramid_errors.max);
   std::printf("depth-fig5 method=andert edge_offset_px=0 mean_abs_error=%.4f max_abs_error=%.4f\n",
@@ -164,9 +101,11 @@ int runDepthFig5(const CommandLine& args) {
   // model once their footprint (t_0 / z pixels) no longer reaches the edge.
   const double sweep_max = args.doubleValue("sweep_max", 8.0);
   for (double offset = 0.5; offset <= sweep_max + 1e-9; offset += 0.5) {
-    const Profile ideal_off = axisProfile(DepthMethod::kIdeal, offset);
-    const Errors p = errorsAgainst(ideal_off, axisProfile(DepthMethod::kPyramid, offset));
-    const Errors a = errorsAgainst(ideal_off, axisProfile(DepthMethod::kAndert, offset));
+    const Profile ideal_off = fig5AxisProfile(DepthMethod::kIdeal, offset);
+    const ProfileErrors p =
+        errorsAgainstIdeal(ideal_off, fig5AxisProfile(DepthMethod::kPyramid, offset));
+    const ProfileErrors a =
+        errorsAgainstIdeal(ideal_off, fig5AxisProfile(DepthMethod::kAndert, offset));
     std::printf(
         "depth-fig5-offaxis edge_offset_px=%.1f pyramid_mean=%.4f pyramid_max=%.4f "
         "andert_mean=%.4f andert_max=%.4f closer=%s (tie: means within 1e-4)\n",
