@@ -33,6 +33,7 @@
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/middlebury_folder.h"
 #include "occupancy_fusion/tools/command_line.h"
+#include "occupancy_fusion/tools/stereo_matching.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -82,47 +83,7 @@ std::vector<double> positiveNumbers(const std::string& option, const std::string
 // ---------------------------------------------------------------------------------------------
 // Disparity from the images: OpenCV's semi-global matcher.
 
-struct SgbmSettings {
-  int num_disparities = 80;  // px, a multiple of 16
-  int block_size = 5;        // px
-};
-
-// StereoSGBM on a rectified pair, as float disparity of the left image in px (its 1/16 px fixed
-// point divided out) plus offset_px; unmatched pixels (below minDisparity) become NaN.
-//   blockSize 5: the quarter-size Middlebury images have little texture per pixel; 3 px windows
-//     leave many wrong matches, 7 px and more round off the objects' edges.
-//   P1 = 8 * 3 * 5^2, P2 = 32 * 3 * 5^2: OpenCV's documented choice for 3-channel input (the
-//     smoothness penalties for disparity changes of 1 px and more).
-//   uniquenessRatio 10, speckleWindowSize 100, speckleRange 2, disp12MaxDiff 1: OpenCV's
-//     stereo_match sample; they reject ambiguous matches, small islands and left-right
-//     inconsistent pixels, but keep the matcher's errors on repetitive or untextured surfaces.
-//   MODE_SGBM_3WAY: the fast 3-way variant (a real-time matcher's choice).
-std::vector<float> sgbmDisparity(const std::string& left_path, const std::string& right_path,
-                                 const SgbmSettings& settings, float offset_px, int* width,
-                                 int* height) {
-  const cv::Mat left = cv::imread(left_path, cv::IMREAD_COLOR);
-  const cv::Mat right = cv::imread(right_path, cv::IMREAD_COLOR);
-  if (left.empty() || right.empty()) {
-    throw std::runtime_error("cannot read " + left_path + " / " + right_path);
-  }
-  const int block = settings.block_size;
-  const cv::Ptr<cv::StereoSGBM> matcher = cv::StereoSGBM::create(
-      0, settings.num_disparities, block, 8 * 3 * block * block, 32 * 3 * block * block, 1, 0, 10,
-      100, 2, cv::StereoSGBM::MODE_SGBM_3WAY);
-  cv::Mat fixed_point;
-  matcher->compute(left, right, fixed_point);  // CV_16S, disparity * 16
-  *width = fixed_point.cols;
-  *height = fixed_point.rows;
-  std::vector<float> disparity(fixed_point.total());
-  for (int v = 0; v < fixed_point.rows; ++v) {
-    for (int u = 0; u < fixed_point.cols; ++u) {
-      const short raw = fixed_point.at<short>(v, u);
-      disparity[static_cast<std::size_t>(v) * fixed_point.cols + u] =
-          raw >= 0 ? raw / 16.0f + offset_px : std::numeric_limits<float>::quiet_NaN();
-    }
-  }
-  return disparity;
-}
+// SgbmSettings and sgbmDisparity: tools/stereo_matching.h (shared with make_demo_recording).
 
 // How far the matcher's disparity is from the ground truth where both exist.
 struct MatchQuality {

@@ -15,12 +15,14 @@
 #include <vector>
 
 #include <ros/time.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/file_readers.h"
 #include "occupancy_fusion/tools/map_outputs.h"
 #include "occupancy_fusion/tools/recording_mapper.h"
 #include "occupancy_fusion/tools/rosbag_reader.h"
+#include "occupancy_fusion/tools/voxel_picture.h"
 #include "occupancy_fusion/tools/yaml_parameter_source.h"
 
 namespace occupancy_fusion {
@@ -34,7 +36,9 @@ depth images, disparity images) and a 2D laser layer (laser scans), as the mappe
 online. Writes DIR/NAME.bt, .ot (OctoMap), .pcd (every known voxel with its occupancy
 probability), .pgm + .yaml (map_server files of the fused 2D view: the voxels within
 occupancy_min_z..occupancy_max_z and the laser layer), .npy (per-column log-odds behind the 2D
-view) and .png (a picture of the 2D view).
+view), .png (a picture of the 2D view, y up) and NAME_voxels.png (the occupied voxels in 3D, seen
+obliquely, coloured by height; only when some voxel is occupied). A progress line (frames per
+sensor kind, elapsed time, rate) is printed every two seconds, and a summary at the end.
 
 Inputs (at least one; any mix, each repeatable):
   --bag FILE           rosbag; several bags are merged in time order and share their tf.
@@ -68,6 +72,7 @@ Parameters and output:
                        its sensor's frame: NAME_scan.npy (log-ratios), .pgm + .yaml, .png; a
                        60 m x 30 m grid at the map's resolution, the sensor at the middle of
                        the lower long edge facing into it (Yguel et al.'s Table I setup)
+  --voxel-picture-max-z Z  leave voxels above Z m out of NAME_voxels.png (e.g. a ceiling)
   --quiet              no progress lines
   --help               this text
 Exit status: 0 done, 2 bad arguments, parameters or input files, 1 failure while mapping
@@ -84,7 +89,8 @@ struct Options {
   std::vector<std::string> middlebury_folders;
   std::vector<std::string> carmen_logs;
   int carmen_max_scans = 0;
-  int single_scan = -1;  // none
+  int single_scan = -1;              // none
+  double voxel_picture_max_z = 1e9;  // m
   std::string output_dir;
   std::string name;
   bool quiet = false;
@@ -118,6 +124,7 @@ Options parseOptions(const CommandLine& line) {
   options.output_dir = line.required("output-dir");
   options.name = line.value("name", "map");
   options.quiet = line.has("quiet");
+  options.voxel_picture_max_z = line.doubleValue("voxel-picture-max-z", 1e9);
   if (options.name.empty() || options.name.find('/') != std::string::npos) {
     throw UsageError("--name must be a plain file name, got '" + options.name + "'");
   }
@@ -140,17 +147,28 @@ Options parseOptions(const CommandLine& line) {
   return options;
 }
 
-// Prints "frames done / total, elapsed" at most every two seconds.
+// Prints, at most every two seconds, "frames done / total (integrated per sensor kind), elapsed,
+// rate", so a long run shows how far it is and which sensors it is integrating.
 class ProgressPrinter {
  public:
-  ProgressPrinter(std::size_t total, bool quiet) : total_(total), quiet_(quiet) {}
+  ProgressPrinter(std::size_t total, const RecordingMapper* mapper, bool quiet)
+      : total_(total), mapper_(mapper), quiet_(quiet) {}
 
   void operator()(std::size_t done) {
     const auto now = std::chrono::steady_clock::now();
     if (quiet_ || now - last_print_ < std::chrono::seconds(2)) return;
     last_print_ = now;
-    std::cerr << "offline_mapper: " << done << " / " << total_ << " frames, " << std::fixed
-              << std::setprecision(1) << elapsedSeconds() << " s\n";
+    const double elapsed = elapsedSeconds();
+    std::ostringstream line;
+    line << "offline_mapper: " << done << " / " << total_ << " frames (";
+    const char* separator = "";
+    for (const auto& [kind, count] : mapper_->statistics().frames_by_kind) {
+      line << separator << kind << " " << count;
+      separator = ", ";
+    }
+    line << "), " << std::fixed << std::setprecision(1) << elapsed << " s, "
+         << (elapsed > 0 ? done / elapsed : 0.0) << " frames/s\n";
+    std::cerr << line.str();
   }
   double elapsedSeconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
@@ -158,6 +176,7 @@ class ProgressPrinter {
 
  private:
   std::size_t total_;
+  const RecordingMapper* mapper_;
   bool quiet_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_print_ = start_;
@@ -256,6 +275,21 @@ class ScanPicker : public FrameConsumer {
   std::optional<LaserScanFrame> picked_;
 };
 
+// NAME_voxels.png: the occupied voxels in 3D below --voxel-picture-max-z (none when no voxel is
+// occupied).
+void writeVoxelPicture(const VoxelMap& map, const Options& options, MapOutputs* outputs) {
+  VoxelPictureConfig config;
+  config.max_z = options.voxel_picture_max_z;
+  const VoxelPicture picture = renderOccupiedVoxels(map, config);
+  if (picture.voxels == 0) return;
+  const std::string path =
+      (std::filesystem::path(options.output_dir) / (options.name + "_voxels.png")).string();
+  if (!cv::imwrite(path, picture.image, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
+    throw std::runtime_error("cannot write " + path);
+  }
+  outputs->files.push_back(path);
+}
+
 // Everything that can fail because of the user's input, before any mapping: UsageError.
 struct Setup {
   Options options;
@@ -284,11 +318,12 @@ std::vector<std::unique_ptr<InputReader>> openReaders(const Options& options) {
 }
 
 Setup prepare(int argc, char** argv) {
-  const CommandLine line(argc, argv,
-                         {"config", "namespace", "set", "bag", "cloud-topic", "depth-topic",
-                          "disparity-topic", "scan-topic", "depth-folder", "middlebury-folder",
-                          "carmen", "carmen-max-scans", "single-scan", "output-dir", "name"},
-                         {"quiet", "help"});
+  const CommandLine line(
+      argc, argv,
+      {"config", "namespace", "set", "bag", "cloud-topic", "depth-topic", "disparity-topic",
+       "scan-topic", "depth-folder", "middlebury-folder", "carmen", "carmen-max-scans",
+       "single-scan", "output-dir", "name", "voxel-picture-max-z"},
+      {"quiet", "help"});
   Setup setup;
   setup.options = parseOptions(line);
   try {
@@ -342,8 +377,8 @@ int run(int argc, char** argv) {
   Setup setup = prepare(argc, argv);
   std::size_t total_frames = 0;
   for (const auto& reader : setup.readers) total_frames += reader->frameCount();
-  ProgressPrinter progress(total_frames, setup.options.quiet);
   RecordingMapper mapper(setup.config, nullptr, &std::cerr);
+  ProgressPrinter progress(total_frames, &mapper, setup.options.quiet);
   ScanPicker picker(&mapper, setup.options.single_scan);
   std::size_t frames_before = 0;
   for (const auto& reader : setup.readers) {
@@ -352,7 +387,8 @@ int run(int argc, char** argv) {
     reader->read(&picker, [&](std::size_t done) { progress(frames_before + done); });
     frames_before += reader->frameCount();
   }
-  const MapOutputs outputs = writeMapOutputs(mapper, setup.options.output_dir, setup.options.name);
+  MapOutputs outputs = writeMapOutputs(mapper, setup.options.output_dir, setup.options.name);
+  writeVoxelPicture(mapper.map(), setup.options, &outputs);
   printSummary(setup.readers, mapper, outputs, progress.elapsedSeconds());
   for (const std::string& key : setup.parameters->unreadOverrides()) {
     std::cerr << "offline_mapper: warning: --set " << key
