@@ -11,7 +11,6 @@
 // the camera_info of the same stamp, as CameraSubscriber's exact synchroniser pairs them; if
 // that one was lost, with the latest, since a depth camera's intrinsics do not change while it
 // runs. An image never waits for camera_info (one waiting stage, the tf2 filter, is enough).
-#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -141,15 +140,18 @@ class DepthMapper : public MapperNodeletBase {
  private:
   using Image = sensor_msgs::Image;
   using CameraInfo = sensor_msgs::CameraInfo;
+  static constexpr const char* kNoCameraInfo = "no camera_info";
+  static constexpr const char* kEncoding = "encoding";
+  static constexpr const char* kBadCameraInfo = "camera_info";
 
   void onInit() override {
     setUpMapper([this](const ParameterSource& parameters) {
       integrator_ = std::make_unique<PyramidDepthIntegrator>(readPyramidDepthConfig(parameters));
     });
     subscribe(queueSize());
-    startDiagnostics("depth mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& status) {
-      fillDiagnostics(status);
-    });
+    startDiagnostics(
+        "depth mapping", {kNoCameraInfo, kEncoding, kBadCameraInfo},
+        [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
     NODELET_INFO("mapping depth images from '%s' with camera_info from '%s' (%s method)",
                  image_subscriber_.getTopic().c_str(), camera_info_subscriber_.getTopic().c_str(),
                  toString(integrator_->config().method).c_str());
@@ -167,8 +169,8 @@ class DepthMapper : public MapperNodeletBase {
     // Long enough to hold the camera_info of every image the tf2 filter may still hold back.
     camera_infos_.setCacheSize(static_cast<unsigned int>(2 * queue_size + 2));
     camera_infos_.connectInput(camera_info_subscriber_);
-    tf_filter_ = makeMapFrameFilter<Image>(image_subscriber_, "depth image", &dropped_no_transform_,
-                                           [this](const Image& image) { onImage(image); });
+    tf_filter_ = makeMapFrameFilter<Image>(image_subscriber_, "depth image",
+                                           [this](const Image& image) { return onImage(image); });
   }
 
   // The camera_info stamped like the image, else the latest one; null when none arrived yet.
@@ -179,24 +181,25 @@ class DepthMapper : public MapperNodeletBase {
     return camera_infos_.getElemBeforeTime(ros::TIME_MAX);
   }
 
-  void onImage(const Image& image) {
+  // Whether the image was integrated.
+  bool onImage(const Image& image) {
     const CameraInfo::ConstPtr info = cameraInfoFor(image);
     if (!info) {
-      ++dropped_no_camera_info_;
+      countDropped(kNoCameraInfo);
       NODELET_WARN_THROTTLE(5.0, "no camera_info received yet on '%s': depth image dropped",
                             camera_info_subscriber_.getTopic().c_str());
-      return;
+      return false;
     }
-    const std::optional<Eigen::Isometry3d> T_map_camera =
-        poseInMap(image, "depth image", &dropped_no_transform_);
-    if (!T_map_camera) return;
+    const std::optional<Eigen::Isometry3d> T_map_camera = poseInMap(image, "depth image");
+    if (!T_map_camera) return false;
     try {
       integrate(image, *info, *T_map_camera);
+      return true;
     } catch (const DroppedImage& error) {
-      ++(error.reason() == DroppedImage::Reason::kEncoding ? dropped_encoding_
-                                                           : dropped_camera_info_);
+      countDropped(error.reason() == DroppedImage::Reason::kEncoding ? kEncoding : kBadCameraInfo);
       NODELET_ERROR_THROTTLE(5.0, "depth image on '%s' dropped: %s",
                              image_subscriber_.getTopic().c_str(), error.what());
+      return false;
     }
   }
 
@@ -206,24 +209,22 @@ class DepthMapper : public MapperNodeletBase {
     std::vector<float> storage;
     const DepthImageView depth = depthInMetres(image, &storage);
     last_stats_ = integrator_->integrate(depth, camera, T_map_camera, &map().voxels());
-    ++integrated_images_;
     NODELET_DEBUG("integrated a %dx%d depth image: %zu voxels in %.1f ms", camera.width,
                   camera.height, last_stats_.voxels_updated, last_stats_.milliseconds);
   }
 
   void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
-    if (dropped_encoding_ > 0 || dropped_camera_info_ > 0) {
+    const FrameStatistics& frames = frameStatistics();
+    if (frames.dropped(kEncoding) > 0 || frames.dropped(kBadCameraInfo) > 0) {
       status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "mapping; bad images dropped");
-    } else if (integrated_images_ == 0 && dropped_no_camera_info_ > 0) {
+    } else if (frames.integrated() == 0 && frames.dropped(kNoCameraInfo) > 0) {
       status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for camera_info");
     } else {
       status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
     }
-    status.add("images integrated", integrated_images_.load());
-    status.add("images dropped (no transform)", dropped_no_transform_.load());
-    status.add("images dropped (no camera_info)", dropped_no_camera_info_.load());
-    status.add("images dropped (encoding)", dropped_encoding_.load());
-    status.add("images dropped (camera_info)", dropped_camera_info_.load());
+    status.add("images integrated", frames.integrated());
+    status.add("images dropped (encoding)", frames.dropped(kEncoding));
+    status.add("images dropped (camera_info)", frames.dropped(kBadCameraInfo));
     status.add("last image voxels updated", last_stats_.voxels_updated);
     status.add("last image blocks updated", last_stats_.blocks_updated);
     status.add("last image ms", last_stats_.milliseconds);
@@ -236,11 +237,6 @@ class DepthMapper : public MapperNodeletBase {
   message_filters::Cache<CameraInfo> camera_infos_;
   std::unique_ptr<tf2_ros::MessageFilter<Image>> tf_filter_;
 
-  std::atomic<std::size_t> integrated_images_{0};
-  std::atomic<std::size_t> dropped_no_transform_{0};
-  std::atomic<std::size_t> dropped_no_camera_info_{0};
-  std::atomic<std::size_t> dropped_encoding_{0};
-  std::atomic<std::size_t> dropped_camera_info_{0};
   DepthIntegrationStats last_stats_;
 };
 

@@ -31,6 +31,8 @@ namespace occupancy_fusion {
 class DisparityMapper : public MapperNodeletBase {
  private:
   using Disparity = stereo_msgs::DisparityImage;
+  static constexpr const char* kInvalid = "invalid";
+  static constexpr const char* kNoCameraInfo = "no camera_info";
 
   void onInit() override {
     setUpMapper([this](const ParameterSource& parameters) {
@@ -42,7 +44,7 @@ class DisparityMapper : public MapperNodeletBase {
                  toString(integrator_->config().disparity.input_resolution).c_str());
     subscribe();
     startDiagnostics(
-        "disparity mapping",
+        "disparity mapping", {kInvalid, kNoCameraInfo},
         [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
   }
 
@@ -54,18 +56,18 @@ class DisparityMapper : public MapperNodeletBase {
         [this](const sensor_msgs::CameraInfo::ConstPtr& info) { camera_info_ = info; });
     disparity_subscriber_.subscribe(getNodeHandle(), "disparity", queueSize());
     tf_filter_ = makeMapFrameFilter<Disparity>(
-        disparity_subscriber_, "disparity image", &dropped_no_transform_,
-        [this](const Disparity& disparity) { onDisparity(disparity); });
+        disparity_subscriber_, "disparity image",
+        [this](const Disparity& disparity) { return onDisparity(disparity); });
   }
 
   // The header of a DisparityImage is the left optical frame's (stereo_image_proc copies the left
-  // image's header into both the message and its image).
-  void onDisparity(const Disparity& message) {
+  // image's header into both the message and its image). Whether the image was integrated.
+  bool onDisparity(const Disparity& message) {
     if (!camera_info_) {
-      ++dropped_no_camera_info_;
+      countDropped(kNoCameraInfo);
       NODELET_WARN_THROTTLE(5.0, "no camera_info received yet on '%s': disparity images dropped",
                             camera_info_subscriber_.getTopic().c_str());
-      return;
+      return false;
     }
     std::vector<float> disparity;
     StereoCamera camera;
@@ -73,35 +75,33 @@ class DisparityMapper : public MapperNodeletBase {
       disparity = validDisparities(message);
       camera = stereoCameraOf(message, *camera_info_);
     } catch (const std::invalid_argument& error) {
-      ++dropped_invalid_;
+      countDropped(kInvalid);
       NODELET_ERROR_THROTTLE(5.0, "disparity image dropped: %s", error.what());
-      return;
+      return false;
     }
-    const std::optional<Eigen::Isometry3d> T_map_camera =
-        poseInMap(message, "disparity image", &dropped_no_transform_);
-    if (!T_map_camera) return;
+    const std::optional<Eigen::Isometry3d> T_map_camera = poseInMap(message, "disparity image");
+    if (!T_map_camera) return false;
     const DisparityImageView view{static_cast<int>(message.image.width),
                                   static_cast<int>(message.image.height), disparity.data(), 0};
     last_stats_ = integrator_->integrate(view, camera, *T_map_camera, &map().voxels());
-    ++integrated_images_;
     skipped_points_ += last_stats_.skipped_points;
     dropped_uncertain_points_ += last_stats_.dropped_uncertain;
     NODELET_DEBUG("integrated %zu points (%zu skipped) in %.1f ms, cache hit rate %.2f",
                   last_stats_.points, last_stats_.skipped_points, last_stats_.milliseconds(),
                   last_stats_.cacheHitRate());
+    return true;
   }
 
   void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
-    const bool starved = !camera_info_ && dropped_no_camera_info_ > 0;
+    const FrameStatistics& frames = frameStatistics();
+    const bool starved = !camera_info_ && frames.dropped(kNoCameraInfo) > 0;
     if (starved) {
       status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for camera_info");
     } else {
       status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
     }
-    status.add("images integrated", integrated_images_.load());
-    status.add("images dropped (invalid)", dropped_invalid_.load());
-    status.add("images dropped (no camera_info)", dropped_no_camera_info_.load());
-    status.add("images dropped (no transform)", dropped_no_transform_.load());
+    status.add("images integrated", frames.integrated());
+    status.add("images dropped (invalid)", frames.dropped(kInvalid));
     status.add("points skipped", skipped_points_.load());
     status.add("points dropped (sigma_z / z over max_depth_sigma_ratio)",
                dropped_uncertain_points_.load());
@@ -119,10 +119,6 @@ class DisparityMapper : public MapperNodeletBase {
   message_filters::Subscriber<Disparity> disparity_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<Disparity>> tf_filter_;
 
-  std::atomic<std::size_t> integrated_images_{0};
-  std::atomic<std::size_t> dropped_invalid_{0};
-  std::atomic<std::size_t> dropped_no_camera_info_{0};
-  std::atomic<std::size_t> dropped_no_transform_{0};
   std::atomic<std::size_t> skipped_points_{0};
   std::atomic<std::size_t> dropped_uncertain_points_{0};
   StereoIntegrationStats last_stats_;

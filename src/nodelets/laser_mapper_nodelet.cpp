@@ -97,6 +97,7 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
 
 class LaserMapper : public MapperNodeletBase {
  private:
+  static constexpr const char* kRejected = "rejected: bad scan or pose, tilted scanner";
   // One observation source: its subscriber, filter, integrator for the world layer, and its
   // latest scan with its pose in the vehicle frame for the local grid.
   struct Source {
@@ -119,9 +120,9 @@ class LaserMapper : public MapperNodeletBase {
         [this](const ParameterSource& parameters) { config_ = readLaserMapperConfig(parameters); });
     for (const LaserSourceConfig& source : config_.sources) subscribe(source);
     startLocalGrid();
-    startDiagnostics("laser mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& status) {
-      fillDiagnostics(status);
-    });
+    startDiagnostics(
+        "laser mapping", {kRejected},
+        [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
     NODELET_INFO("mapping %zu laser source(s) into map '%s' (frame '%s') and a local grid in '%s'",
                  sources_.size(), map().name().c_str(), map().frameId().c_str(),
                  config_.local_grid.frame_id.c_str());
@@ -137,7 +138,7 @@ class LaserMapper : public MapperNodeletBase {
     if (config_.write_world_layer) targets.push_back(map().frameId());
     source->filter = makeTransformFilter<ScanMessage>(
         source->subscriber, targets,
-        [this, source](const ScanMessage& scan) { onScan(scan, source); },
+        [this, source](const ScanMessage& scan) { return onScan(scan, source); },
         [this, source](const ScanMessage& scan) {
           ++source->dropped;
           NODELET_WARN_THROTTLE(5.0, "source '%s': no transform from '%s' at %.3f: scan dropped",
@@ -159,7 +160,8 @@ class LaserMapper : public MapperNodeletBase {
     return planarPose(pose, max_tilt, upside_down);
   }
 
-  void onScan(const ScanMessage& message, Source* source) {
+  // Whether the scan was integrated.
+  bool onScan(const ScanMessage& message, Source* source) {
     const auto start = std::chrono::steady_clock::now();
     const std::string& sensor_frame =
         source->config.sensor_frame.empty() ? message.header.frame_id : source->config.sensor_frame;
@@ -183,13 +185,15 @@ class LaserMapper : public MapperNodeletBase {
                        message.header.stamp, source);
     } catch (const std::exception& error) {  // bad scan, tf2 lookup, tilted scanner
       ++source->rejected;
+      countDropped(kRejected);
       NODELET_ERROR_THROTTLE(5.0, "source '%s' (topic '%s'): scan dropped: %s",
                              source->config.name.c_str(), source->config.topic.c_str(),
                              error.what());
-      return;
+      return false;
     }
     ++source->integrated;
     last_scan_ms_ = millisecondsSince(start);
+    return true;
   }
 
   // The scanners are fixed on the vehicle: the local grid (and its exact overlay) is rebuilt only

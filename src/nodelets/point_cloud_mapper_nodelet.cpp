@@ -21,6 +21,7 @@ namespace occupancy_fusion {
 class PointCloudMapper : public MapperNodeletBase {
  private:
   using Cloud = sensor_msgs::PointCloud2;
+  static constexpr const char* kInvalidCloud = "invalid cloud";
 
   void onInit() override {
     setUpMapper([this](const ParameterSource& parameters) {
@@ -28,37 +29,38 @@ class PointCloudMapper : public MapperNodeletBase {
           std::make_unique<PointCloudIntegrator>(readPointCloudIntegratorConfig(parameters));
     });
     cloud_subscriber_.subscribe(getNodeHandle(), "cloud_in", queueSize());
-    tf_filter_ = makeMapFrameFilter<Cloud>(cloud_subscriber_, "cloud", &dropped_clouds_,
-                                           [this](const Cloud& cloud) { onCloud(cloud); });
+    tf_filter_ = makeMapFrameFilter<Cloud>(cloud_subscriber_, "cloud",
+                                           [this](const Cloud& cloud) { return onCloud(cloud); });
     startDiagnostics(
-        "point cloud mapping",
+        "point cloud mapping", {kInvalidCloud},
         [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
   }
 
-  void onCloud(const Cloud& cloud) {
-    const std::optional<Eigen::Isometry3d> map_T_cloud =
-        poseInMap(cloud, "cloud", &dropped_clouds_);
-    if (!map_T_cloud) return;
+  // Whether the cloud was integrated.
+  bool onCloud(const Cloud& cloud) {
+    const std::optional<Eigen::Isometry3d> map_T_cloud = poseInMap(cloud, "cloud");
+    if (!map_T_cloud) return false;
     std::vector<Eigen::Vector3f> points;
     try {
       points = transformedPoints(cloud, *map_T_cloud);
     } catch (const std::invalid_argument& error) {
-      ++dropped_clouds_;
+      countDropped(kInvalidCloud);
       NODELET_WARN_THROTTLE(5.0, "cloud dropped: %s", error.what());
-      return;
+      return false;
     }
     // The sensor sits at the origin of the cloud's frame.
     last_stats_ = integrator_->integrate(points, map_T_cloud->translation(), &map().voxels());
-    ++integrated_clouds_;
     skipped_points_ += last_stats_.skipped_points;
     NODELET_DEBUG("integrated %zu points (%zu skipped) in %.1f ms", last_stats_.points,
                   last_stats_.skipped_points, last_stats_.seconds * 1e3);
+    return true;
   }
 
   void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
-    status.add("clouds integrated", integrated_clouds_.load());
-    status.add("clouds dropped", dropped_clouds_.load());
+    const FrameStatistics& frames = frameStatistics();
+    status.add("clouds integrated", frames.integrated());
+    status.add("clouds dropped", frames.droppedTotal());
     status.add("points skipped", skipped_points_.load());
     status.add("last cloud points", last_stats_.points);
     status.add("last cloud ms", last_stats_.seconds * 1e3);
@@ -68,8 +70,6 @@ class PointCloudMapper : public MapperNodeletBase {
   message_filters::Subscriber<Cloud> cloud_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<Cloud>> tf_filter_;
 
-  std::atomic<std::size_t> integrated_clouds_{0};
-  std::atomic<std::size_t> dropped_clouds_{0};
   std::atomic<std::size_t> skipped_points_{0};
   IntegrationStats last_stats_;
 };

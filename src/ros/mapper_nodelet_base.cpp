@@ -30,13 +30,32 @@ void MapperNodeletBase::setUpMapper(
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
 }
 
-void MapperNodeletBase::startDiagnostics(const std::string& task_name, DiagnosticsTask fill) {
+void MapperNodeletBase::startDiagnostics(const std::string& task_name,
+                                         const std::vector<std::string>& drop_reasons,
+                                         DiagnosticsTask fill) {
+  frames_.addDropReasons(drop_reasons);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
                                                                getPrivateNodeHandle(), getName());
   diagnostics_->setHardwareID("map '" + map_->name() + "'");
-  diagnostics_->add(task_name, std::move(fill));
+  diagnostics_->add(task_name, [this, fill = std::move(fill)](
+                                   diagnostic_updater::DiagnosticStatusWrapper& status) {
+    frames_.fill(&status);
+    fill(status);
+  });
   diagnostics_timer_ = getNodeHandle().createTimer(
       ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+}
+
+const char* MapperNodeletBase::tfDropReason(
+    tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+  switch (reason) {
+    case tf2_ros::filter_failure_reasons::OutTheBack:
+      return FrameStatistics::kTfTooOld;
+    case tf2_ros::filter_failure_reasons::EmptyFrameID:
+      return FrameStatistics::kTfNoFrameId;
+    default:  // Unknown: pushed out of the queue or timed out while waiting for the transform
+      return FrameStatistics::kTfQueue;
+  }
 }
 
 }  // namespace occupancy_fusion

@@ -1,0 +1,261 @@
+// Checks mapping.launch with all four mappers in one manager on the Simulator: the fused map
+// (the MapServer's occupied voxel centres and projected_map) against the room scene's ground
+// truth, each mapper's share of it, and each mapper's diagnostics (the keys every mapper reports
+// alike, see FrameStatistics) against the frames this node saw on the same topics.
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <stereo_msgs/DisparityImage.h>
+
+#include "occupancy_fusion/sim/scenes.h"
+#include "rostest_support.h"
+
+namespace occupancy_fusion {
+namespace {
+
+struct Settings {
+  int min_images = 25;
+  int min_scans = 100;
+};
+Settings g_settings;
+
+// The diagnostics task of each mapper, the topics it reads and their nominal total rate.
+struct MapperUnderTest {
+  std::string task;
+  std::vector<std::string> topics;
+  double rate_hz;
+};
+const std::vector<MapperUnderTest> kMappers = {
+    {"depth_mapper: depth mapping", {"camera/depth/image"}, 5.0},
+    {"disparity_mapper: disparity mapping", {"stereo/disparity"}, 5.0},
+    {"laser_mapper: laser mapping", {"front_laser/scan", "rear_laser/scan"}, 20.0},
+    {"point_cloud_mapper: point cloud mapping", {"camera/depth/points"}, 5.0},
+};
+
+// Every key of a mapper's latest diagnostics status, by task.
+using Values = std::map<std::string, std::string>;
+
+// Counts the frames sent on every input topic and keeps the fused map and the diagnostics.
+class Observer {
+ public:
+  explicit Observer(ros::NodeHandle& node_handle) {
+    subscribers_.push_back(node_handle.subscribe<sensor_msgs::Image>(
+        "camera/depth/image", 100, [this](const auto&) { count("camera/depth/image"); }));
+    subscribers_.push_back(node_handle.subscribe<stereo_msgs::DisparityImage>(
+        "stereo/disparity", 100, [this](const auto&) { count("stereo/disparity"); }));
+    for (const std::string topic : {"front_laser/scan", "rear_laser/scan"}) {
+      subscribers_.push_back(node_handle.subscribe<sensor_msgs::LaserScan>(
+          topic, 100, [this, topic](const auto&) { count(topic); }));
+    }
+    subscribers_.push_back(node_handle.subscribe<sensor_msgs::PointCloud2>(
+        "camera/depth/points", 100, [this](const auto&) { count("camera/depth/points"); }));
+    subscribers_.push_back(node_handle.subscribe<sensor_msgs::PointCloud2>(
+        "octomap_point_cloud_centers", 1, [this](const sensor_msgs::PointCloud2::ConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          centres_ = m;
+        }));
+    subscribers_.push_back(node_handle.subscribe<nav_msgs::OccupancyGrid>(
+        "projected_map", 1, [this](const nav_msgs::OccupancyGrid::ConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          projected_ = m;
+        }));
+    subscribers_.push_back(node_handle.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 50, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          for (const auto& status : array->status) {
+            Values& values = diagnostics_[status.name];
+            values.clear();
+            for (const auto& entry : status.values) values[entry.key] = entry.value;
+          }
+        }));
+  }
+
+  std::size_t sent(const std::string& topic) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = sent_.find(topic);
+    return found == sent_.end() ? 0 : found->second;
+  }
+  Values diagnostics(const std::string& task) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = diagnostics_.find(task);
+    return found == diagnostics_.end() ? Values() : found->second;
+  }
+  sensor_msgs::PointCloud2::ConstPtr centres() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return centres_;
+  }
+  nav_msgs::OccupancyGrid::ConstPtr projected() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return projected_;
+  }
+
+ private:
+  void count(const std::string& topic) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++sent_[topic];
+  }
+
+  mutable std::mutex mutex_;
+  std::vector<ros::Subscriber> subscribers_;
+  std::map<std::string, std::size_t> sent_;
+  std::map<std::string, Values> diagnostics_;
+  sensor_msgs::PointCloud2::ConstPtr centres_;
+  nav_msgs::OccupancyGrid::ConstPtr projected_;
+};
+
+double number(const Values& values, const std::string& key) {
+  const auto found = values.find(key);
+  if (found == values.end()) {
+    ADD_FAILURE() << "diagnostics key '" << key << "' missing";
+    return std::nan("");
+  }
+  return std::stod(found->second);
+}
+
+std::size_t count(const Values& values, const std::string& key) {
+  return static_cast<std::size_t>(number(values, key));
+}
+
+// Keys every mapper reports, whatever its sensor.
+const std::vector<std::string> kUniformKeys = {"frames received",
+                                               "input rate (Hz)",
+                                               "frames integrated",
+                                               "frames waiting",
+                                               "frames dropped",
+                                               "tf failures",
+                                               "integration ms (last)",
+                                               "integration ms (mean)",
+                                               "integration ms (max)",
+                                               "frames dropped (tf: no transform while queued)",
+                                               "frames dropped (tf: lookup failed)"};
+
+class SimRobotMapping : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    ros::NodeHandle node_handle;
+    observer_ = new Observer(node_handle);
+  }
+  static void TearDownTestSuite() { delete observer_; }
+  static Observer* observer_;
+};
+Observer* SimRobotMapping::observer_ = nullptr;
+
+TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
+  Observer& observer = *observer_;
+  // Run until every camera sent min_images and the scanners min_scans.
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        return observer.sent("camera/depth/image") >= std::size_t(g_settings.min_images) &&
+               observer.sent("stereo/disparity") >= std::size_t(g_settings.min_images) &&
+               observer.sent("front_laser/scan") + observer.sent("rear_laser/scan") >=
+                   std::size_t(g_settings.min_scans);
+      },
+      60.0));
+  // The input rates, measured by the mappers while the sensors run (one-second windows).
+  std::map<std::string, double> rates;
+  for (const MapperUnderTest& mapper : kMappers) {
+    rates[mapper.task] = number(observer.diagnostics(mapper.task), "input rate (Hz)");
+  }
+  ASSERT_TRUE(setSimulatorPaused(true));
+  // Let every queued frame through and the map server publish the last of them.
+  ros::WallDuration(3.0).sleep();
+
+  for (const MapperUnderTest& mapper : kMappers) {
+    SCOPED_TRACE(mapper.task);
+    const Values values = observer.diagnostics(mapper.task);
+    for (const std::string& key : kUniformKeys) EXPECT_EQ(values.count(key), 1u) << key;
+    std::size_t sent = 0;
+    for (const std::string& topic : mapper.topics) sent += observer.sent(topic);
+    const std::size_t received = count(values, "frames received");
+    const std::size_t integrated = count(values, "frames integrated");
+    // The simulator sends to both subscribers alike; which of them connected first may differ
+    // by a frame or two per topic.
+    EXPECT_NEAR(double(received), double(sent), 2.0 * mapper.topics.size() + 0.05 * sent);
+    // Nothing is left in the tf2 filter, and every frame has an outcome.
+    EXPECT_EQ(count(values, "frames waiting"), 0u);
+    EXPECT_EQ(received, integrated + count(values, "frames dropped"));
+    // The simulator sends tf before each frame, so nearly all are integrated.
+    EXPECT_GE(double(integrated), 0.9 * double(received));
+    EXPECT_LE(count(values, "tf failures"), count(values, "frames dropped"));
+    const double mean_ms = number(values, "integration ms (mean)");
+    EXPECT_GT(mean_ms, 0.0);
+    EXPECT_LE(mean_ms, number(values, "integration ms (max)"));
+    EXPECT_LE(number(values, "integration ms (last)"), number(values, "integration ms (max)"));
+    EXPECT_LT(mean_ms, 2000.0);
+    EXPECT_GT(rates[mapper.task], 0.4 * mapper.rate_hz);
+    EXPECT_LT(rates[mapper.task], 1.6 * mapper.rate_hz);
+  }
+
+  // Each mapper's share of the fused map: the sensor-specific keys of its diagnostics.
+  const Values depth = observer.diagnostics(kMappers[0].task);
+  const Values disparity = observer.diagnostics(kMappers[1].task);
+  const Values laser = observer.diagnostics(kMappers[2].task);
+  const Values cloud = observer.diagnostics(kMappers[3].task);
+  EXPECT_GT(count(depth, "last image voxels updated"), 1000u);
+  EXPECT_GT(count(disparity, "last image voxels updated"), 1000u);
+  EXPECT_GT(count(cloud, "last cloud points"), 5000u);
+  EXPECT_GE(count(laser, "front scans integrated"), std::size_t(g_settings.min_scans / 3));
+  EXPECT_GE(count(laser, "rear scans integrated"), std::size_t(g_settings.min_scans / 3));
+
+  const sim::Scene scene = sim::makeRoomScene();
+  // The 3D map (depth, disparity and point cloud): occupied voxel centres on the true surfaces.
+  const sensor_msgs::PointCloud2::ConstPtr centres_message = observer.centres();
+  ASSERT_TRUE(centres_message);
+  const std::vector<Eigen::Vector3d> centres = cloudPoints(*centres_message);
+  const double tolerance = std::sqrt(3.0) * 0.05 + 0.1;  // a voxel diagonal and stereo error
+  const double near = fractionNearSurface(centres, scene, tolerance);
+  std::printf("%zu occupied voxels, %.1f %% within %.2f m of a surface\n", centres.size(),
+              100.0 * near, tolerance);
+  EXPECT_GE(centres.size(), 5000u);
+  EXPECT_GE(near, 0.95);
+
+  // projected_map: the 3D map's column projection fused with the laser layer; its occupied cells
+  // lie on a solid's outline.
+  const nav_msgs::OccupancyGrid::ConstPtr projected = observer.projected();
+  ASSERT_TRUE(projected);
+  std::size_t occupied = 0, on_outline = 0;
+  for (std::uint32_t y = 0; y < projected->info.height; ++y) {
+    for (std::uint32_t x = 0; x < projected->info.width; ++x) {
+      if (projected->data[x + projected->info.width * y] != 100) continue;
+      ++occupied;
+      const Eigen::Vector2d centre = cellCentre(*projected, int(x), int(y));
+      double nearest = INFINITY;
+      for (double z = 0.05; z <= 2.0; z += 0.05) {
+        nearest = std::min(nearest, scene.distanceToSurface({centre.x(), centre.y(), z}));
+      }
+      on_outline += nearest <= 0.1 ? 1 : 0;
+    }
+  }
+  std::printf("projected_map: %zu occupied cells, %zu on an outline\n", occupied, on_outline);
+  EXPECT_GE(occupied, 400u);
+  EXPECT_GE(double(on_outline) / double(occupied), 0.95);
+  // The room's walls at x = +-4 m are seen by the laser scanners (10 m range, both ways) in
+  // every turn, and by the cameras only in part of it.
+  EXPECT_EQ(cellAt(*projected, 3.91, 0.0), 100);
+  EXPECT_EQ(cellAt(*projected, -3.91, 0.0), 100);
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "sim_robot_mapping");
+  ros::NodeHandle private_handle("~");
+  private_handle.param("min_images", occupancy_fusion::g_settings.min_images,
+                       occupancy_fusion::g_settings.min_images);
+  private_handle.param("min_scans", occupancy_fusion::g_settings.min_scans,
+                       occupancy_fusion::g_settings.min_scans);
+  return occupancy_fusion::runTestsWhileSpinning();
+}
