@@ -17,18 +17,19 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "occupancy_fusion/eval/stereo_corridor.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/stereo_camera.h"
-#include "occupancy_fusion/sim/trajectory.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
@@ -36,116 +37,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr double kBaseline = 0.12;      // m
-constexpr double kMaxRange = 8.0;       // m, rendered depth limit of the artifacts run
-constexpr double kStepPerFrame = 0.03;  // m, the paper's rate: 774 m in 26,000 frames
-constexpr double kHeight = 1.2;         // m, camera height
-
-sim::PinholeCamera corridorCamera() {
-  sim::PinholeCamera camera;
-  camera.width = 160;
-  camera.height = 120;
-  camera.fx = camera.fy = 131.25;
-  camera.cx = 79.5;
-  camera.cy = 59.5;
-  return camera;
-}
-
-StereoCamera stereoOf(const sim::PinholeCamera& camera) {
-  return {camera.fx, camera.fy, camera.cx, camera.cy, kBaseline};
-}
-
-sim::DisparityNoise correlatedNoise() {
-  sim::DisparityNoise noise;
-  noise.sigma_px = 0.3;
-  noise.patch_probability = 0.3;
-  noise.patch_size_px = 12;
-  noise.patch_offset_px = 1.5;
-  noise.patch_persistence_frames = 10;
-  noise.seed = 7;
-  return noise;
-}
-
-std::vector<Eigen::Isometry3d> corridorPoses(int frames) {
-  const Eigen::Vector3d start(0.5, 0.0, kHeight);
-  const Eigen::Vector3d end = start + Eigen::Vector3d(kStepPerFrame * frames, 0.0, 0.0);
-  std::vector<Eigen::Isometry3d> poses;
-  for (const Eigen::Isometry3d& body : sim::straightLinePath(start, end, frames, 0.0, 0.0)) {
-    poses.push_back(body * sim::opticalFrameInBody());
-  }
-  return poses;
-}
-
-// One frame's points in the map frame, as every mapper of the run receives them.
-struct Frame {
-  Eigen::Vector3d origin;
-  std::vector<Eigen::Vector3f> points;
-  std::vector<float> sigmas;
-};
-
-std::vector<Frame> renderFrames(const sim::Scene& scene,
-                                const std::vector<Eigen::Isometry3d>& poses,
-                                const VisibilityStereoIntegrator& converter) {
-  const sim::PinholeCamera camera = corridorCamera();
-  std::vector<Frame> frames(poses.size());
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    const sim::DisparityImage image = sim::renderDisparity(
-        scene, camera, kBaseline, poses[k], kMaxRange, correlatedNoise(), static_cast<int>(k));
-    const DisparityImageView view{image.width, image.height, image.disparity.data(), 0};
-    converter.disparityToMapPoints(view, stereoOf(camera), poses[k], &frames[k].points,
-                                   &frames[k].sigmas, nullptr);
-    frames[k].origin = poses[k].translation();
-  }
-  return frames;
-}
-
-// Surface samples that some pose sees directly (in its image, within range, not occluded).
-std::vector<Eigen::Vector3d> visibleSurface(const sim::Scene& scene,
-                                            const std::vector<Eigen::Isometry3d>& poses,
-                                            double spacing) {
-  const sim::PinholeCamera camera = corridorCamera();
-  std::vector<Eigen::Vector3d> visible;
-  for (const Eigen::Vector3d& sample : scene.sampleSurface(spacing)) {
-    for (std::size_t k = 0; k < poses.size(); k += 4) {  // every 4th pose: 12 cm apart
-      const Eigen::Vector3d p = poses[k].inverse() * sample;
-      if (p.z() <= 0.1 || p.z() > kMaxRange) continue;
-      const double u = camera.fx * p.x() / p.z() + camera.cx;
-      const double v = camera.fy * p.y() / p.z() + camera.cy;
-      if (u < 0 || v < 0 || u > camera.width - 1 || v > camera.height - 1) continue;
-      const Eigen::Vector3d offset = sample - poses[k].translation();
-      const double distance = offset.norm();
-      const auto t = scene.castRay(poses[k].translation(), offset / distance, distance + 0.01);
-      if (t && *t >= distance - 0.02) {
-        visible.push_back(sample);
-        break;
-      }
-    }
-  }
-  return visible;
-}
-
-// A finished map, as the evaluation sees it: its occupied voxels on the shared grid (index =
-// floor(p / resolution), which liboctomap's keys follow too) and an occupancy test.
-struct OccupiedVoxels {
-  std::vector<VoxelIndex> voxels;
-  SpatialKeySet keys;
-  void add(const VoxelIndex& index) {
-    if (keys.insert(packKey(index)).second) voxels.push_back(index);
-  }
-  bool contains(const VoxelIndex& index) const { return keys.count(packKey(index)) > 0; }
-};
-
-OccupiedVoxels occupiedOf(const VoxelMap& map) {
-  OccupiedVoxels occupied;
-  map.forEachOccupiedVoxel([&](const VoxelIndex& index, float) { occupied.add(index); });
-  return occupied;
-}
-
-OccupiedVoxels occupiedOf(const octomap::OcTree& tree, double resolution) {
-  OccupiedVoxels occupied;
+// liboctomap's occupied leaves on the shared grid (pruned leaves expanded to the finest level).
+OccupiedVoxelSet occupiedOf(const octomap::OcTree& tree, double resolution) {
+  OccupiedVoxelSet occupied;
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
     if (!tree.isNodeOccupied(*it)) continue;
-    // A pruned leaf stands for size^3 voxels of the finest level.
     const int n = static_cast<int>(std::lround(it.getSize() / resolution));
     const octomap::point3d c = it.getCoordinate();
     const double half = 0.5 * it.getSize();
@@ -163,73 +59,27 @@ OccupiedVoxels occupiedOf(const octomap::OcTree& tree, double resolution) {
   return occupied;
 }
 
-struct Quality {
-  std::size_t occupied = 0;
-  std::size_t false_occupied = 0;
-  double coverage = 0.0;
-  std::vector<bool> is_false;  // per occupied voxel, for the pictures
-};
-
-Quality evaluate(const sim::Scene& scene, const OccupiedVoxels& map, double resolution,
-                 const std::vector<Eigen::Vector3d>& surface) {
-  Quality quality;
-  const double tolerance = std::sqrt(3.0) * resolution;  // one voxel diagonal
-  for (const VoxelIndex& index : map.voxels) {
-    const Eigen::Vector3d center = (index.cast<double>().array() + 0.5) * resolution;
-    const bool wrong = !scene.isOccupied(center) && scene.distanceToSurface(center) > tolerance;
-    quality.is_false.push_back(wrong);
-    quality.false_occupied += wrong ? 1 : 0;
-  }
-  quality.occupied = map.voxels.size();
-  std::size_t covered = 0;
-  for (const Eigen::Vector3d& sample : surface) {
-    const VoxelIndex base = voxelIndexOf(sample, resolution);
-    bool found = false;
-    for (int dz = -1; dz <= 1 && !found; ++dz) {
-      for (int dy = -1; dy <= 1 && !found; ++dy) {
-        for (int dx = -1; dx <= 1 && !found; ++dx) {
-          found = map.contains(base + VoxelIndex(dx, dy, dz));
-        }
-      }
-    }
-    covered += found ? 1 : 0;
-  }
-  quality.coverage = surface.empty() ? 0.0 : static_cast<double>(covered) / surface.size();
-  return quality;
-}
-
 struct Run {
   std::string name;
-  OccupiedVoxels occupied;
+  OccupiedVoxelSet occupied;
   double ms_per_frame = 0.0;
   double cache_hit_rate = -1.0;  // -1: not applicable
-  Quality quality;
+  StereoMapQuality quality;
 };
 
 Run mapWithIntegrator(const std::string& name, const VisibilityStereoConfig& config,
-                      const std::vector<Frame>& frames, double resolution) {
-  const VisibilityStereoIntegrator integrator(config);
-  VoxelMapConfig map_config;
-  map_config.resolution = resolution;
-  VoxelMap map(map_config);
-  double seconds = 0.0;
-  std::size_t visits = 0, hits = 0;
-  for (const Frame& frame : frames) {
-    const StereoIntegrationStats stats =
-        integrator.integrate(frame.points, frame.sigmas, frame.origin, &map);
-    seconds += stats.seconds;
-    visits += stats.voxel_visits;
-    hits += stats.cache_hits;
-  }
-  Run run{name, occupiedOf(map), 1e3 * seconds / frames.size(), 0.0, {}};
-  run.cache_hit_rate = visits == 0 ? 0.0 : static_cast<double>(hits) / visits;
+                      const std::vector<StereoFrame>& frames, double resolution) {
+  StereoCorridorRun result = mapStereoCorridor(config, frames, resolution);
+  Run run{name, std::move(result.occupied), 1e3 * result.seconds / frames.size(), 0.0, {}};
+  run.cache_hit_rate =
+      result.voxel_visits == 0 ? 0.0 : static_cast<double>(result.cache_hits) / result.voxel_visits;
   return run;
 }
 
-Run mapWithLiboctomap(const std::vector<Frame>& frames, double resolution) {
+Run mapWithLiboctomap(const std::vector<StereoFrame>& frames, double resolution) {
   octomap::OcTree tree(resolution);  // liboctomap's defaults: hit 0.7, miss 0.4, clamp 0.12/0.97
   double seconds = 0.0;
-  for (const Frame& frame : frames) {
+  for (const StereoFrame& frame : frames) {
     octomap::Pointcloud cloud;
     cloud.reserve(frame.points.size());
     for (const Eigen::Vector3f& p : frame.points) cloud.push_back(p.x(), p.y(), p.z());
@@ -248,7 +98,7 @@ Run mapWithLiboctomap(const std::vector<Frame>& frames, double resolution) {
 // in blue.
 
 cv::Mat topView(const Run& run, const sim::Scene& scene, double resolution,
-                const std::vector<Eigen::Isometry3d>& poses) {
+                const std::vector<Eigen::Isometry3d>& poses, double camera_height) {
   constexpr double kMinX = -1.0, kMaxX = 13.0, kMinY = -4.0, kMaxY = 4.0;
   constexpr int kPixelsPerMetre = 40;
   const int width = static_cast<int>((kMaxX - kMinX) * kPixelsPerMetre);
@@ -261,7 +111,7 @@ cv::Mat topView(const Run& run, const sim::Scene& scene, double resolution,
   const double cell = 1.0 / kPixelsPerMetre;
   for (double x = kMinX; x < kMaxX; x += cell) {
     for (double y = kMinY; y < kMaxY; y += cell) {
-      if (scene.isOccupied({x + 0.5 * cell, y + 0.5 * cell, kHeight})) {
+      if (scene.isOccupied({x + 0.5 * cell, y + 0.5 * cell, camera_height})) {
         image.at<cv::Vec3b>(pixelOf(x, y + cell)) = cv::Vec3b(200, 200, 200);
       }
     }
@@ -314,14 +164,16 @@ std::vector<double> mappedDistanceGrowth(VisibilityStereoConfig config, double r
   // corridor's length, as octomap_server's max_range does.
   config.max_range = kFig5aRange;
   const sim::Scene scene = sim::makeCorridorScene();
-  const sim::PinholeCamera camera = corridorCamera();
-  const Eigen::Isometry3d pose = corridorPoses(2).front();
+  StereoCorridorSetup setup;
+  setup.frames = 2;
+  const sim::PinholeCamera camera = setup.camera();
+  const Eigen::Isometry3d pose = setup.poses().front();
   // The exact disparity, the same image every update. (With white noise, pixels near the end
   // wall get disparities near 0 and sigma_z of kilometres: P(I_v) ~ 0.5 along their whole ray,
   // and the reduction's maximum over rays turns the voxels next to the sensor occupied.)
   const sim::DisparityNoise noise;
   const sim::DisparityImage image =
-      sim::renderDisparity(scene, camera, kBaseline, pose, kFig5aRange, noise, 0);
+      sim::renderDisparity(scene, camera, setup.baseline, pose, kFig5aRange, noise, 0);
   const DisparityImageView view{image.width, image.height, image.disparity.data(), 0};
   const VisibilityStereoIntegrator integrator(config);
   VoxelMapConfig map_config;
@@ -329,7 +181,7 @@ std::vector<double> mappedDistanceGrowth(VisibilityStereoConfig config, double r
   VoxelMap map(map_config);
   std::vector<double> distances;
   for (int k = 0; k < updates; ++k) {
-    integrator.integrate(view, stereoOf(camera), pose, &map);
+    integrator.integrate(view, setup.stereo(), pose, &map);
     distances.push_back(farthestOccupied(map, pose.translation()));
   }
   return distances;
@@ -382,14 +234,45 @@ cv::Mat plotGrowth(const std::vector<Curve>& curves, int updates) {
 
 // ---------------------------------------------------------------------------------------------
 
-VisibilityStereoConfig configFrom(const CommandLine& args) {
+// The visibility method's parameters from the command line, each over the defaults (with
+// `lists`, the sweep's, the four swept parameters are left to runSweep).
+VisibilityStereoConfig configFrom(const CommandLine& args, bool lists) {
   VisibilityStereoConfig config;
   config.unknown_neighbours = unknownNeighboursFromString(
       args.value("unknown_neighbours", toString(config.unknown_neighbours)));
   config.unknown_neighbour_occupancy =
       args.doubleValue("unknown_neighbour_occupancy", config.unknown_neighbour_occupancy);
+  if (lists) return config;
+  config.visibility_max = args.doubleValue("q_max", config.visibility_max);
+  config.visibility_min = args.doubleValue("q_min", config.visibility_min);
+  config.prob_visible_if_occluded =
+      args.doubleValue("p_visible_occluded", config.prob_visible_if_occluded);
+  config.prob_hit_invisible = args.doubleValue("p_hit_invisible", config.prob_hit_invisible);
   config.validate();
   return config;
+}
+
+std::vector<double> numberList(const CommandLine& args, const std::string& option,
+                               double fallback) {
+  std::vector<double> values;
+  if (!args.has(option)) return {fallback};
+  std::stringstream stream(args.value(option));
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size()) {
+      throw UsageError("--" + option + " needs numbers separated by commas");
+    }
+    values.push_back(value);
+  }
+  if (values.empty()) throw UsageError("--" + option + " is empty");
+  return values;
 }
 
 void writeImage(const std::string& path, const cv::Mat& image) {
@@ -397,43 +280,118 @@ void writeImage(const std::string& path, const cv::Mat& image) {
   std::printf("wrote %s\n", path.c_str());
 }
 
+StereoCorridorSetup setupFrom(const CommandLine& args) {
+  StereoCorridorSetup setup;
+  setup.frames = args.intValue("frames", setup.frames);
+  if (setup.frames < 2) throw UsageError("--frames must be at least 2");
+  return setup;
+}
+
+std::string coverageBins(const StereoMapQuality& quality) {
+  std::string text;
+  for (int b = 0; b < kCoverageDistanceBins; ++b) {
+    char item[64];
+    std::snprintf(item, sizeof(item), "%scoverage_%d_%dm=%.3f", b == 0 ? "" : " ",
+                  static_cast<int>(b * kCoverageBinWidth),
+                  static_cast<int>((b + 1) * kCoverageBinWidth), quality.coverage_by_distance[b]);
+    text += item;
+  }
+  return text;
+}
+
 void runArtifacts(const CommandLine& args, const VisibilityStereoConfig& visibility_config) {
-  const int frames = args.intValue("frames", 80);
+  const StereoCorridorSetup setup = setupFrom(args);
   const double resolution = args.doubleValue("resolution", 0.2);
-  if (frames < 2) throw UsageError("--frames must be at least 2");
   if (!(resolution > 0)) throw UsageError("--resolution must be positive");
   const sim::Scene scene = sim::makeCorridorScene();
-  const std::vector<Eigen::Isometry3d> poses = corridorPoses(frames);
-  const std::vector<Frame> input = renderFrames(scene, poses, VisibilityStereoIntegrator());
-  const std::vector<Eigen::Vector3d> surface = visibleSurface(scene, poses, resolution);
+  const std::vector<Eigen::Isometry3d> poses = setup.poses();
+  const std::vector<StereoFrame> input =
+      renderStereoCorridor(scene, setup, VisibilityStereoIntegrator());
+  const std::vector<SeenSurfaceSample> surface = seenSurface(scene, setup, resolution);
   VisibilityStereoConfig octomap_config = visibility_config;
   octomap_config.method = StereoIntegrationMethod::kOctomap;
   std::vector<Run> runs;
   runs.push_back(mapWithIntegrator("visibility", visibility_config, input, resolution));
   runs.push_back(mapWithIntegrator("octomap_mode", octomap_config, input, resolution));
   runs.push_back(mapWithLiboctomap(input, resolution));
-  for (Run& run : runs) run.quality = evaluate(scene, run.occupied, resolution, surface);
-  const Quality& reference = runs[1].quality;
-  std::printf("# corridor: %d frames, %.2f m voxels, %zu visible surface samples\n", frames,
-              resolution, surface.size());
+  for (Run& run : runs) run.quality = evaluateStereoMap(scene, run.occupied, resolution, surface);
+  const StereoMapQuality& reference = runs[1].quality;
+  std::printf(
+      "# corridor: %d frames, %.2f m voxels, %zu visible surface samples (by nearest "
+      "view, 2 m bins: %zu %zu %zu %zu)\n",
+      setup.frames, resolution, surface.size(), reference.samples_by_distance[0],
+      reference.samples_by_distance[1], reference.samples_by_distance[2],
+      reference.samples_by_distance[3]);
   for (const Run& run : runs) {
     std::printf(
         "disparity-artifacts method=%s frames=%d resolution=%.2f occupied=%zu "
         "false_occupied=%zu coverage=%.3f false_occupied_vs_octomap_mode=%.3f "
-        "coverage_vs_octomap_mode=%.3f ms_per_frame=%.1f cache_hit_rate=%.3f\n",
-        run.name.c_str(), frames, resolution, run.quality.occupied, run.quality.false_occupied,
-        run.quality.coverage,
+        "coverage_vs_octomap_mode=%.3f ms_per_frame=%.1f cache_hit_rate=%.3f %s\n",
+        run.name.c_str(), setup.frames, resolution, run.quality.occupied,
+        run.quality.false_occupied, run.quality.coverage,
         static_cast<double>(run.quality.false_occupied) /
             std::max<std::size_t>(1, reference.false_occupied),
         run.quality.coverage / std::max(1e-9, reference.coverage), run.ms_per_frame,
-        run.cache_hit_rate);
+        run.cache_hit_rate, coverageBins(run.quality).c_str());
   }
   if (args.has("images")) {
     std::vector<cv::Mat> panels;
-    for (const Run& run : runs) panels.push_back(topView(run, scene, resolution, poses));
+    for (const Run& run : runs) {
+      panels.push_back(topView(run, scene, resolution, poses, setup.height));
+    }
     cv::Mat stacked;
     cv::vconcat(panels, stacked);
     writeImage(args.value("images") + "/disparity_artifacts_top.png", stacked);
+  }
+}
+
+// The trade-off Sec. IV names (map expansion against map quality): the visibility method over a
+// grid of q_max, q_min, P(V | C, V) and P(H | not V) per voxel size, each against the OctoMap
+// mode on the same points. One line per configuration.
+void runSweep(const CommandLine& args, const VisibilityStereoConfig& base) {
+  const StereoCorridorSetup setup = setupFrom(args);
+  const sim::Scene scene = sim::makeCorridorScene();
+  const std::vector<StereoFrame> input =
+      renderStereoCorridor(scene, setup, VisibilityStereoIntegrator());
+  for (double resolution : numberList(args, "resolution", 0.2)) {
+    if (!(resolution > 0)) throw UsageError("--resolution must be positive");
+    const std::vector<SeenSurfaceSample> surface = seenSurface(scene, setup, resolution);
+    VisibilityStereoConfig octomap_config = base;
+    octomap_config.method = StereoIntegrationMethod::kOctomap;
+    const StereoMapQuality reference = evaluateStereoMap(
+        scene, mapStereoCorridor(octomap_config, input, resolution).occupied, resolution, surface);
+    std::printf(
+        "disparity-sweep method=octomap_mode frames=%d resolution=%.2f false_occupied=%zu "
+        "coverage=%.3f %s\n",
+        setup.frames, resolution, reference.false_occupied, reference.coverage,
+        coverageBins(reference).c_str());
+    for (double q_max : numberList(args, "q_max", base.visibility_max)) {
+      for (double q_min : numberList(args, "q_min", base.visibility_min)) {
+        for (double p_vc : numberList(args, "p_visible_occluded", base.prob_visible_if_occluded)) {
+          for (double p_hi : numberList(args, "p_hit_invisible", base.prob_hit_invisible)) {
+            VisibilityStereoConfig config = base;
+            config.visibility_max = q_max;
+            config.visibility_min = std::min(q_min, q_max);
+            config.prob_visible_if_occluded = p_vc;
+            config.prob_hit_invisible = p_hi;
+            config.validate();
+            const StereoMapQuality q = evaluateStereoMap(
+                scene, mapStereoCorridor(config, input, resolution).occupied, resolution, surface);
+            std::printf(
+                "disparity-sweep method=visibility frames=%d resolution=%.2f q_max=%.3f "
+                "q_min=%.3f p_visible_occluded=%.3f p_hit_invisible=%.3f false_occupied=%zu "
+                "coverage=%.3f false_occupied_vs_octomap_mode=%.3f coverage_vs_octomap_mode=%.3f "
+                "%s\n",
+                setup.frames, resolution, q_max, config.visibility_min, p_vc, p_hi,
+                q.false_occupied, q.coverage,
+                static_cast<double>(q.false_occupied) /
+                    std::max<std::size_t>(1, reference.false_occupied),
+                q.coverage / std::max(1e-9, reference.coverage), coverageBins(q).c_str());
+            std::fflush(stdout);
+          }
+        }
+      }
+    }
   }
 }
 
@@ -468,10 +426,14 @@ void runFig5a(const CommandLine& args, const VisibilityStereoConfig& visibility_
 }  // namespace
 
 int runDisparityArtifacts(const CommandLine& args) {
-  const VisibilityStereoConfig config = configFrom(args);
   const std::string part = args.value("part", "all");
-  if (part != "all" && part != "artifacts" && part != "fig5a") {
-    throw UsageError("--part must be all, artifacts or fig5a");
+  const VisibilityStereoConfig config = configFrom(args, part == "sweep");
+  if (part != "all" && part != "artifacts" && part != "fig5a" && part != "sweep") {
+    throw UsageError("--part must be all, artifacts, fig5a or sweep");
+  }
+  if (part == "sweep") {
+    runSweep(args, config);
+    return 0;
   }
   if (part != "fig5a") runArtifacts(args, config);
   if (part != "artifacts") runFig5a(args, config);
