@@ -37,6 +37,9 @@ int bracketingLevel(const DistancePyramid& pyramid, double distance) {
 // the coarser ones are merged level by level from per-cell distance buckets (see
 // DistanceBuckets), which costs one pass over M for all of them.
 constexpr int kScannedLevels = 3;
+// Per-frame passes over fewer pixels or cells than this run on one thread: an OpenMP region
+// costs a barrier, and a descheduled thread on a shared machine holds it.
+constexpr long kParallelPixels = 16384;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 }  // namespace
@@ -119,6 +122,13 @@ class DistanceBuckets {
   int height_ = 0;
   std::vector<BucketExtremes> cells_;
 };
+
+namespace {
+// Work of one pass over a bucket layer: cells x buckets.
+long cellBucketCount(const DistanceBuckets& buckets, int levels) {
+  return static_cast<long>(buckets.width()) * buckets.height() * (levels + 1);
+}
+}  // namespace
 
 bool DistanceBuckets::closest(const BucketExtremes* cell, int level, float* kept) const {
   const float target = thresholds_[static_cast<std::size_t>(level)];
@@ -235,7 +245,7 @@ std::optional<double> DepthInverseModel::logOddsAtOffset(double offset) const {
 double DepthInverseModel::supportSigmas() { return kGaussianSupportSigmas; }
 
 OffsetLogOddsTable::OffsetLogOddsTable(const DepthInverseModel& model)
-    : limit_(DepthInverseModel::supportSigmas()), far_in_front_(model.farInFrontLogOdds()) {
+    : limit_(DepthInverseModel::supportSigmas()) {
   if (!model.logOddsAtOffset(0.0)) return;
   const auto samples = static_cast<std::size_t>(2.0 * limit_ * kSamplesPerSigma) + 1;
   values_.resize(samples);
@@ -243,6 +253,9 @@ OffsetLogOddsTable::OffsetLogOddsTable(const DepthInverseModel& model)
     values_[i] = static_cast<float>(
         *model.logOddsAtOffset(static_cast<double>(i) / kSamplesPerSigma - limit_));
   }
+  // The constants beyond the support (they differ from the samples at +-limit_ by < 1e-13).
+  values_.front() = model.farInFrontLogOdds();
+  values_.back() = 0.0f;
 }
 
 float DepthInverseModel::logOdds(double distance, double measured) const {
@@ -259,25 +272,35 @@ float DepthInverseModel::logOdds(double distance, double measured) const {
 DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
                                  double t0, int levels, double max_range,
                                  PyramidSelection selection)
-    : thresholds_(std::max(levels, 1)), layers_(std::max(levels, 1)) {
+    : thresholds_(std::max(levels, 1)), scales_(thresholds_.size()), layers_(thresholds_.size()) {
   for (std::size_t level = 0; level < thresholds_.size(); ++level) {
     thresholds_[level] = t0 / static_cast<double>(1 << level);
+    scales_[level] = 1.0 / static_cast<double>(1 << level);
   }
   camera.validate();
   depth.validateAgainst(camera);
   Layer& distances = layers_[0];
   distances.width = camera.width;
   distances.height = camera.height;
-  distances.cells.assign(static_cast<std::size_t>(camera.width) * camera.height, kNaN);
-#pragma omp parallel for schedule(static)
+  distances.cells.resize(static_cast<std::size_t>(camera.width) * camera.height);
+  // Eq. 6: distance = z |pixelRay(u, v)|, the ray's squared x and y per column and row, so the
+  // loop over pixels is branch-free and vectorises (one sqrt per pixel, no division).
+  std::vector<double> ray_x2(static_cast<std::size_t>(camera.width));
+  for (int u = 0; u < camera.width; ++u)
+    ray_x2[u] = camera.pixelRay(u, 0).x() * camera.pixelRay(u, 0).x();
+  const int stride = depth.row_stride > 0 ? depth.row_stride : depth.width;
+  const bool parallel = static_cast<long>(camera.width) * camera.height >= kParallelPixels;
+#pragma omp parallel for schedule(static) if (parallel)
   for (int v = 0; v < camera.height; ++v) {
+    const double ray_y = camera.pixelRay(0, v).y();
+    const double ray_y2 = ray_y * ray_y;
+    const float* depth_row = depth.depth + static_cast<std::size_t>(v) * stride;
+    float* row = &distances.cells[static_cast<std::size_t>(v) * camera.width];
     for (int u = 0; u < camera.width; ++u) {
-      const float z = depth.at(u, v);
-      if (!(z > 0.0f) || !std::isfinite(z)) continue;
-      const double measured = z * camera.pixelRay(u, v).norm();  // Eq. 6
-      if (measured > max_range) continue;
-      distances.cells[static_cast<std::size_t>(v) * camera.width + u] =
-          static_cast<float>(measured);
+      const float z = depth_row[u];
+      const double measured = z * std::sqrt(ray_x2[u] + ray_y2 + 1.0);
+      // Invalid: z <= 0, NaN, infinite, or beyond max_range (NaN compares false).
+      row[u] = z > 0.0f && measured <= max_range ? static_cast<float>(measured) : kNaN;
     }
   }
   for (int level = 1; level < this->levels(); ++level) sizeLayer(level);
@@ -314,7 +337,8 @@ void DistancePyramid::buildMinimumLayers() {
   for (int level = 1; level < levels(); ++level) {
     const Layer& finer = layers_[level - 1];
     Layer& layer = layers_[level];
-#pragma omp parallel for schedule(static)
+    const bool parallel = 4L * layer.width * layer.height >= kParallelPixels;
+#pragma omp parallel for schedule(static) if (parallel)
     for (int v = 0; v < layer.height; ++v) {
       for (int u = 0; u < layer.width; ++u) {
         float best = kInfinity;
@@ -352,7 +376,8 @@ void DistancePyramid::buildClosestLayers() {
   for (int level = kScannedLevels + 1; level < levels(); ++level) {
     std::swap(coarse, finer);
     coarse.resize(layers_[level].width, layers_[level].height);
-#pragma omp parallel for schedule(static)
+    const bool parallel = cellBucketCount(coarse, levels()) >= kParallelPixels;
+#pragma omp parallel for schedule(static) if (parallel)
     for (int v = 0; v < coarse.height(); ++v) {
       for (int u = 0; u < coarse.width(); ++u) {
         for (int child_v = 2 * v; child_v < std::min(finer.height(), 2 * v + 2); ++child_v) {
@@ -415,7 +440,8 @@ void DistancePyramid::fillBuckets(int level, DistanceBuckets* buckets) const {
 void DistancePyramid::takeClosest(const DistanceBuckets& buckets, int level) {
   Layer& layer = layers_[level];
   const float target = static_cast<float>(threshold(level));
-#pragma omp parallel for schedule(dynamic, 1)
+  const bool parallel = cellBucketCount(buckets, levels()) >= kParallelPixels;
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
   for (int v = 0; v < layer.height; ++v) {
     for (int u = 0; u < layer.width; ++u) {
       float& kept = layer.cells[static_cast<std::size_t>(v) * layer.width + u];
@@ -508,79 +534,101 @@ std::optional<float> PyramidDepthIntegrator::voxelLogOdds(
     if (distance < config_.min_range) return std::nullopt;
     return idealLogOdds(frame, voxel_center, distance);
   }
-  return projectedLogOdds(frame, point);
+  const float delta = projectedLogOdds(frame, point);
+  if (std::isnan(delta)) return std::nullopt;
+  return delta;
 }
 
-std::optional<float> PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
-                                                              const Eigen::Vector3d& point) const {
-  const double distance = point.norm();
-  if (distance < config_.min_range || point.z() <= 0.0) return std::nullopt;
-  const Eigen::Vector2d uv = frame.camera.project(point);  // Eq. 13
-  if (!(uv.x() >= -0.5 && uv.x() < frame.camera.width - 0.5 && uv.y() >= -0.5 &&
-        uv.y() < frame.camera.height - 0.5)) {
-    return std::nullopt;
-  }
-  if (config_.method == DepthMethod::kAndert) return andertLogOdds(frame, uv, distance);
-  return pyramidLogOdds(frame, uv, distance);
+namespace {
+
+// floor() of a double known to fit an int, without a libm call.
+int floorToInt(double x) {
+  const int truncated = static_cast<int>(x);
+  return truncated - (x < truncated);
+}
+
+}  // namespace
+
+bool PyramidDepthIntegrator::projectIntoImage(const CameraIntrinsics& camera,
+                                              const Eigen::Vector3d& point, double* u, double* v,
+                                              double* distance) const {
+  *distance = point.norm();
+  if (*distance < config_.min_range || point.z() <= 0.0) return false;
+  const double inverse_z = 1.0 / point.z();  // Eq. 13
+  *u = camera.fx * point.x() * inverse_z + camera.cx;
+  *v = camera.fy * point.y() * inverse_z + camera.cy;
+  return *u >= -0.5 && *u < camera.width - 0.5 && *v >= -0.5 && *v < camera.height - 0.5;
+}
+
+float PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
+                                               const Eigen::Vector3d& point) const {
+  double u = 0.0, v = 0.0, distance = 0.0;
+  if (!projectIntoImage(frame.camera, point, &u, &v, &distance)) return kNaN;
+  if (config_.method == DepthMethod::kAndert) return andertLogOdds(frame, u, v, distance);
+  return pyramidLogOdds(frame, u, v, distance);
 }
 
 PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(const DepthFrame& frame,
-                                                                       int level,
-                                                                       const Eigen::Vector2d& uv,
+                                                                       int level, double pixel_u,
+                                                                       double pixel_v,
                                                                        double distance) const {
   // Eq. 14 with pixel centres at integer coordinates: cell U of layer i is centred on pixel
-  // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5. (2^-i is exact: a multiply.)
-  const double scale = std::ldexp(1.0, -level);
-  const double u = (uv.x() + 0.5) * scale - 0.5;
-  const double v = (uv.y() + 0.5) * scale - 0.5;
-  const int u0 = static_cast<int>(std::floor(u));
-  const int v0 = static_cast<int>(std::floor(v));
+  // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5 (>= -0.5 inside the image).
+  const DistancePyramid& pyramid = frame.pyramid;
+  const double scale = pyramid.scale(level);
+  const double u = (pixel_u + 0.5) * scale - 0.5;
+  const double v = (pixel_v + 0.5) * scale - 0.5;
+  const int u0 = floorToInt(u);
+  const int v0 = floorToInt(v);
   const double fu = u - u0;  // <u> of Eq. 16
   const double fv = v - v0;
-  const int width = frame.pyramid.width(level);
-  const int height = frame.pyramid.height(level);
-  LayerCells cells;
-  for (int dv = 0; dv <= 1; ++dv) {
-    for (int du = 0; du <= 1; ++du) {
-      const double weight = (du ? fu : 1.0 - fu) * (dv ? fv : 1.0 - fv);  // Eq. 15
-      const int cu = u0 + du;
-      const int cv = v0 + dv;
-      if (weight <= 0.0 || cu < 0 || cv < 0 || cu >= width || cv >= height) continue;
-      const float measured = frame.pyramid.at(level, cu, cv);
-      // Invalid pixels contribute nothing: Eq. 15 is renormalised over the valid neighbours.
-      if (!isValidMeasurement(measured)) continue;
-      cells.weights[cells.count] = weight;
-      cells.measured[cells.count] = measured;
-      ++cells.count;
-      cells.weight_sum += weight;
-      cells.informs = cells.informs || model_.informs(distance, measured);
+  const int width = pyramid.width(level);
+  const int height = pyramid.height(level);
+  const float* cells = pyramid.cells(level);
+  const double weights[4] = {(1.0 - fu) * (1.0 - fv), fu * (1.0 - fv), (1.0 - fu) * fv,
+                             fu * fv};  // Eq. 15
+  // Inside the layer all four cells exist: one test instead of four.
+  const bool interior = u0 >= 0 && v0 >= 0 && u0 + 1 < width && v0 + 1 < height;
+  LayerCells result;
+  for (int i = 0; i < 4; ++i) {
+    const int cu = u0 + (i & 1);
+    const int cv = v0 + (i >> 1);
+    float measured = kNaN;
+    if (interior || (cu >= 0 && cv >= 0 && cu < width && cv < height)) {
+      measured = cells[static_cast<std::size_t>(cv) * width + cu];
     }
+    // Invalid pixels contribute nothing: Eq. 15 is renormalised over the valid neighbours.
+    // Their slots keep weight 0 and a harmless measurement, so Eq. 16 needs no branches.
+    const bool valid = weights[i] > 0.0 && isValidMeasurement(measured);
+    result.weights[i] = valid ? weights[i] : 0.0;
+    result.measured[i] = valid ? measured : static_cast<float>(distance);
+    result.weight_sum += result.weights[i];
+    result.informs = result.informs || (valid && model_.informs(distance, measured));
   }
-  return cells;
+  return result;
 }
 
 float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells, double distance) const {
   double weighted = 0.0;
-  for (int i = 0; i < cells.count; ++i) {
+  for (int i = 0; i < 4; ++i) {
     weighted += cells.weights[i] * cellLogOdds(distance, cells.measured[i]);  // Eq. 16
   }
   return static_cast<float>(weighted / cells.weight_sum);
 }
 
-std::optional<float> PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame,
-                                                            const Eigen::Vector2d& uv,
-                                                            double distance) const {
+float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, double u, double v,
+                                             double distance) const {
   const DistancePyramid& pyramid = frame.pyramid;
   const int level = bracketingLevel(pyramid, distance);
   // Beyond t_0, or nearer than the last layer's t: one layer alone.
   if (level < 0 || level + 1 >= pyramid.levels()) {
-    const LayerCells only = gatherCells(frame, std::max(level, 0), uv, distance);
-    if (!only.valid() || !only.informs) return std::nullopt;
+    const LayerCells only = gatherCells(frame, std::max(level, 0), u, v, distance);
+    if (!only.valid() || !only.informs) return kNaN;
     return bilinearLogOdds(only, distance);
   }
-  const LayerCells fine = gatherCells(frame, level, uv, distance);
-  const LayerCells coarse = gatherCells(frame, level + 1, uv, distance);
-  if (!(fine.informs || coarse.informs)) return std::nullopt;
+  const LayerCells fine = gatherCells(frame, level, u, v, distance);
+  const LayerCells coarse = gatherCells(frame, level + 1, u, v, distance);
+  if (!(fine.informs || coarse.informs)) return kNaN;
   if (!fine.valid()) return bilinearLogOdds(coarse, distance);
   if (!coarse.valid()) return bilinearLogOdds(fine, distance);
   const float fine_log_odds = bilinearLogOdds(fine, distance);  // float: Eq. 17 subtracts in float
@@ -593,21 +641,18 @@ std::optional<float> PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& fr
                                                 (t_coarse - t_fine));
 }
 
-std::optional<float> PyramidDepthIntegrator::andertLogOdds(const DepthFrame& frame,
-                                                           const Eigen::Vector2d& uv,
-                                                           double distance) const {
+float PyramidDepthIntegrator::andertLogOdds(const DepthFrame& frame, double u, double v,
+                                            double distance) const {
   // The layer whose cells best match the voxel's footprint of t_0 / z pixels, nearest cell.
   const DistancePyramid& pyramid = frame.pyramid;
   const double footprint_log2 = std::log2(pyramid.threshold(0) / distance);
   const int level =
       std::clamp(static_cast<int>(std::lround(footprint_log2)), 0, pyramid.levels() - 1);
-  const double scale = 1.0 / static_cast<double>(1 << level);
-  const int cu =
-      std::min(static_cast<int>(std::floor((uv.x() + 0.5) * scale)), pyramid.width(level) - 1);
-  const int cv =
-      std::min(static_cast<int>(std::floor((uv.y() + 0.5) * scale)), pyramid.height(level) - 1);
+  const double scale = pyramid.scale(level);
+  const int cu = std::min(floorToInt((u + 0.5) * scale), pyramid.width(level) - 1);
+  const int cv = std::min(floorToInt((v + 0.5) * scale), pyramid.height(level) - 1);
   const float measured = pyramid.at(level, std::max(cu, 0), std::max(cv, 0));
-  if (!isValidMeasurement(measured) || !model_.informs(distance, measured)) return std::nullopt;
+  if (!isValidMeasurement(measured) || !model_.informs(distance, measured)) return kNaN;
   return cellLogOdds(distance, measured);
 }
 
@@ -703,24 +748,35 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
   std::vector<char> all_valid(tile_count, 1);
   // Slightly nearer than Eq. 7's support, so rounding cannot claim a voxel it would not give.
   constexpr double kFrontSafety = 1e-6;  // m
-#pragma omp parallel for schedule(static)
+  // From each tile's nearest and farthest measurement: reach grows with the measurement, and
+  // front = measured - supportSigmas() sigma(measured) is at least nearest - supportSigmas()
+  // sigma(farthest) (exact for constant sigma). Branch-free min / max passes; NaN (invalid)
+  // never compares, so it drops out.
+  const float* distances = pyramid.cells(0);
+  const bool parallel = static_cast<long>(camera.width) * camera.height >= kParallelPixels;
+#pragma omp parallel for schedule(static) if (parallel)
   for (int tv = 0; tv < tiles_v; ++tv) {
     const int v_end = std::min(camera.height, (tv + 1) * kTile);
-    for (int v = tv * kTile; v < v_end; ++v) {
-      for (int u = 0; u < camera.width; ++u) {
-        const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + u / kTile;
-        const float measured = pyramid.at(0, u, v);
-        if (!isValidMeasurement(measured)) {
-          all_valid[tile] = 0;
-          continue;
+    for (int tu = 0; tu < tiles_u; ++tu) {
+      const int u_end = std::min(camera.width, (tu + 1) * kTile);
+      float nearest = std::numeric_limits<float>::infinity();
+      float farthest = -std::numeric_limits<float>::infinity();
+      int valid = 0;
+      for (int v = tv * kTile; v < v_end; ++v) {
+        const float* row = distances + static_cast<std::size_t>(v) * camera.width;
+        for (int u = tu * kTile; u < u_end; ++u) {
+          nearest = row[u] < nearest ? row[u] : nearest;
+          farthest = row[u] > farthest ? row[u] : farthest;
+          valid += isValidMeasurement(row[u]);
         }
-        const double sigma = model_.sigmaAt(measured);
-        reach[tile] = std::max(
-            reach[tile], static_cast<float>(measured + config_.unknown_behind_sigmas * sigma));
-        front[tile] = std::min(
-            front[tile], static_cast<float>(measured - DepthInverseModel::supportSigmas() * sigma -
-                                            kFrontSafety));
       }
+      const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + tu;
+      all_valid[tile] = valid == (v_end - tv * kTile) * (u_end - tu * kTile);
+      if (valid == 0) continue;
+      const double sigma_far = model_.sigmaAt(farthest);
+      reach[tile] = static_cast<float>(farthest + config_.unknown_behind_sigmas * sigma_far);
+      front[tile] = static_cast<float>(nearest - DepthInverseModel::supportSigmas() * sigma_far -
+                                       kFrontSafety);
     }
   }
   const float max_reach = *std::max_element(reach.begin(), reach.end());
@@ -823,24 +879,22 @@ int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const Candidat
   // bit-identical results: Andert's scheme is discontinuous at cell borders.
   const VoxelIndex first = VoxelMap::voxelIndex(block.index, 0);
   const CameraIntrinsics& camera = frame.camera;
+  const float far_in_front = model_.farInFrontLogOdds();
   for (int z = 0; z < VoxelBlock::kSide; ++z) {
     for (int y = 0; y < VoxelBlock::kSide; ++y) {
       for (int x = 0; x < VoxelBlock::kSide; ++x) {
         const Eigen::Vector3d point =
             frame.T_camera_map * map.centerOf(first + VoxelIndex(x, y, z));
-        std::optional<float> delta;
+        float delta = kNaN;
         if (!block.far_in_front) {
           delta = projectedLogOdds(frame, point);
-        } else if (point.z() > 0.0 && point.norm() >= config_.min_range) {
+        } else {
           // The same tests as projectedLogOdds; every cell read gives Eq. 7's constant.
-          const Eigen::Vector2d uv = camera.project(point);
-          if (uv.x() >= -0.5 && uv.x() < camera.width - 0.5 && uv.y() >= -0.5 &&
-              uv.y() < camera.height - 0.5) {
-            delta = model_.farInFrontLogOdds();
-          }
+          double u = 0.0, v = 0.0, distance = 0.0;
+          if (projectIntoImage(camera, point, &u, &v, &distance)) delta = far_in_front;
         }
-        if (!delta) continue;
-        deltas[VoxelBlock::linearIndex(x, y, z)] = *delta;
+        if (std::isnan(delta)) continue;
+        deltas[VoxelBlock::linearIndex(x, y, z)] = delta;
         ++count;
       }
     }

@@ -97,12 +97,14 @@ class DistancePyramid {
 
   int levels() const { return static_cast<int>(layers_.size()); }
   double threshold(int level) const { return thresholds_[level]; }  // t_i = t0 / 2^i (Eq. 11)
+  double scale(int level) const { return scales_[level]; }          // 2^-i, exact
   int width(int level) const { return layers_[level].width; }
   int height(int level) const { return layers_[level].height; }
   float at(int level, int u, int v) const {
     const Layer& layer = layers_[level];
     return layer.cells[static_cast<std::size_t>(v) * layer.width + u];
   }
+  const float* cells(int level) const { return layers_[level].cells.data(); }  // row-major
 
  private:
   struct Layer {
@@ -122,6 +124,7 @@ class DistancePyramid {
   static void fillLayer(const Layer& full, int level, Score score, Layer* layer);
 
   std::vector<double> thresholds_;  // t_i per layer, read for every voxel
+  std::vector<double> scales_;      // 2^-i per layer, read for every voxel
   std::vector<Layer> layers_;       // layers_[0] is M itself
 };
 
@@ -144,10 +147,10 @@ class OffsetLogOddsTable {
   explicit OffsetLogOddsTable(const DepthInverseModel& model);  // empty unless sigma constant
 
   bool empty() const { return values_.empty(); }
+  // Branch-free: the first and last samples are the constants outside the support, so a
+  // clamped offset reads them exactly.
   float at(double offset) const {
-    if (offset < -limit_) return far_in_front_;
-    if (offset > limit_) return 0.0f;
-    const double position = (offset + limit_) * kSamplesPerSigma;
+    const double position = (std::clamp(offset, -limit_, limit_) + limit_) * kSamplesPerSigma;
     const std::size_t index = std::min(static_cast<std::size_t>(position), values_.size() - 2);
     const float fraction = static_cast<float>(position - static_cast<double>(index));
     return values_[index] + fraction * (values_[index + 1] - values_[index]);
@@ -156,7 +159,6 @@ class OffsetLogOddsTable {
  private:
   static constexpr double kSamplesPerSigma = 1024.0;
   double limit_ = 0.0;
-  float far_in_front_ = 0.0f;
   std::vector<float> values_;
 };
 
@@ -195,26 +197,29 @@ class PyramidDepthIntegrator {
                                   const Eigen::Isometry3d& T_map_camera, VoxelMap* map) const;
 
  private:
-  // The valid cells of one layer that Eq. 15 weighs for a voxel (at most four), gathered
-  // before any Eq. 7 evaluation: a voxel none of whose cells informs it (behind every surface
-  // it sees) is rejected after a few comparisons.
+  // The cells of one layer that Eq. 15 weighs for a voxel, gathered before any Eq. 7
+  // evaluation: a voxel none of whose cells informs it (behind every surface it sees) is
+  // rejected after a few comparisons. Invalid or absent cells have weight 0.
   struct LayerCells {
-    int count = 0;
     double weights[4] = {};
     float measured[4] = {};
     double weight_sum = 0.0;
-    bool informs = false;  // at least one of them informs the voxel
+    bool informs = false;  // at least one valid cell informs the voxel
     bool valid() const { return weight_sum > 0.0; }
   };
-  LayerCells gatherCells(const DepthFrame& frame, int level, const Eigen::Vector2d& uv,
+  // The per-voxel functions return NaN for "no update" (no std::optional in the voxel loop).
+  LayerCells gatherCells(const DepthFrame& frame, int level, double u, double v,
                          double distance) const;                          // Eq. 14-15
   float bilinearLogOdds(const LayerCells& cells, double distance) const;  // Eq. 16
-  std::optional<float> pyramidLogOdds(const DepthFrame& frame, const Eigen::Vector2d& uv,
-                                      double distance) const;  // Eq. 12, 17
-  std::optional<float> andertLogOdds(const DepthFrame& frame, const Eigen::Vector2d& uv,
-                                     double distance) const;
+  float pyramidLogOdds(const DepthFrame& frame, double u, double v,
+                       double distance) const;  // Eq. 12, 17
+  float andertLogOdds(const DepthFrame& frame, double u, double v, double distance) const;
   std::optional<float> idealLogOdds(const DepthFrame& frame, const Eigen::Vector3d& voxel_center,
                                     double distance) const;  // Eq. 8-9
+  // Eq. 13 for a point in the camera frame: false unless it lies at least min_range from the
+  // camera centre, in front of it, and projects inside the image.
+  bool projectIntoImage(const CameraIntrinsics& camera, const Eigen::Vector3d& point, double* u,
+                        double* v, double* distance) const;
 
   // A candidate block; far_in_front: every pyramid cell any of its voxels can read is valid
   // and more than supportSigmas() beyond the voxel, so each voxel inside the image gets Eq. 7's
@@ -230,9 +235,9 @@ class PyramidDepthIntegrator {
     return table_.empty() ? model_.logOdds(distance, measured)
                           : table_.at((distance - measured) * inverse_sigma_);
   }
-  // voxelLogOdds for a voxel centre already in the camera frame (pyramid and Andert).
-  std::optional<float> projectedLogOdds(const DepthFrame& frame,
-                                        const Eigen::Vector3d& point) const;
+  // voxelLogOdds for a voxel centre already in the camera frame (pyramid and Andert); NaN: no
+  // update.
+  float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
   // Fills the kVolume increments of one block (NaN: no update); returns how many it set.
   int blockLogOdds(const DepthFrame& frame, const CandidateBlock& block, const VoxelMap& map,
                    float* deltas) const;
