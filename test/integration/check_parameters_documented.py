@@ -10,11 +10,17 @@ or commented out ("# fx: 262.4"), under a path that ends with the key (a key rea
 file, kKeyPrefix = "depth/", is resolved). image_transport's ~image_transport, read by the
 library through the TransportHints the depth mapper passes its private node handle, is included.
 
-Usage: check_parameters_documented.py <package root>; exits 1 and lists the undocumented keys.
+Usage: check_parameters_documented.py <package root> [--junit FILE.xml]; exits 1 and lists the
+undocumented keys. With --junit it also writes JUnit XML (as the gtests do, into catkin's
+test_results folder, where scripts/count_test_results.py counts it): one test case per source
+file that reads parameters, failing with that file's undocumented keys, and one that fails when
+the extraction no longer finds the keys known to exist.
 """
+import argparse
 import pathlib
 import re
 import sys
+import xml.etree.ElementTree as ElementTree
 
 # Where the nodelets' parameters are read (the offline tools read the same YAML through the same
 # readers).
@@ -35,13 +41,15 @@ YAML_KEY = re.compile(r"^(\s*)(#\s*)?([A-Za-z_][\w]*)\s*:(?:\s|$)")
 
 
 def keys_read(root):
+    """Every key read in code: {key: [(source file, line), ...]} in the order found."""
     keys = {}
     for pattern in SOURCE_GLOBS:
         for path in sorted(root.glob(pattern)):
             text = path.read_text()
             prefixes = dict(PREFIX_CONSTANT.findall(text))
             for match in TRANSPORT_HINTS.finditer(text):
-                keys.setdefault("image_transport", str(path.relative_to(root)))
+                line = text.count("\n", 0, match.start()) + 1
+                keys.setdefault("image_transport", []).append((str(path.relative_to(root)), line))
             for regex in (GET_CALL, HELPER_CALL):
                 for match in regex.finditer(text):
                     # A prefix held in a constant of this file is part of the key; one computed at
@@ -51,7 +59,7 @@ def keys_read(root):
                     # A key: path components of identifier characters (not messages or paths).
                     if re.fullmatch(r"[a-z_][a-z0-9_]*(/[a-z_][a-z0-9_]*)*", key):
                         line = text.count("\n", 0, match.start()) + 1
-                        keys.setdefault(key, f"{path.relative_to(root)}:{line}")
+                        keys.setdefault(key, []).append((str(path.relative_to(root)), line))
     return keys
 
 
@@ -78,21 +86,56 @@ def is_documented(key, paths):
     return any(p == key or p.endswith("/" + key) for p in paths)
 
 
+EXPECTED_KEYS = ("queue_size", "publish_map", "sensor_model/hit", "observation_sources",
+                 "depth/sigma", "laser/max_tilt", "image_transport")
+
+
+def write_junit(path, keys, missing, extraction_missing):
+    """One test case per source file (its undocumented keys as the failure), one for extraction."""
+    by_file = {}
+    for key, places in keys.items():
+        for source, line in places:
+            by_file.setdefault(source, [])
+            if key in missing:
+                by_file[source].append(f"{key} (line {line})")
+    suite = ElementTree.Element("testsuite", name="parameters_documented")
+    cases = [("extraction", [f"'{key}' not found in the sources" for key in extraction_missing])]
+    cases += [(source, undocumented) for source, undocumented in sorted(by_file.items())]
+    for name, problems in cases:
+        case = ElementTree.SubElement(suite, "testcase", classname="parameters_documented",
+                                      name=name)
+        if problems:
+            failure = ElementTree.SubElement(case, "failure",
+                                             message=f"{len(problems)} undocumented")
+            failure.text = "\n".join(problems)
+    suite.set("tests", str(len(cases)))
+    suite.set("failures", str(sum(1 for _, problems in cases if problems)))
+    suite.set("errors", "0")
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ElementTree.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
+
+
 def main():
-    root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ".").resolve()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("root", nargs="?", default=".", help="package root")
+    parser.add_argument("--junit", help="also write the result as JUnit XML to this file")
+    arguments = parser.parse_args()
+    root = pathlib.Path(arguments.root).resolve()
     keys = keys_read(root)
     paths = documented_paths(root)
     # The extraction must find the parameters we know exist, or it has silently broken.
-    for expected in ("queue_size", "publish_map", "sensor_model/hit", "observation_sources",
-                     "depth/sigma", "laser/max_tilt", "image_transport"):
-        if expected not in keys:
-            print(f"extraction broken: '{expected}' not found in the sources")
-            return 1
+    extraction_missing = [key for key in EXPECTED_KEYS if key not in keys]
+    for key in extraction_missing:
+        print(f"extraction broken: '{key}' not found in the sources")
     missing = sorted(k for k in keys if not is_documented(k, paths))
     print(f"{len(keys)} parameter keys read in code, {len(paths)} key paths in config/*.yaml")
     for key in missing:
-        print(f"undocumented: {key} (read at {keys[key]})")
-    return 1 if missing else 0
+        source, line = keys[key][0]
+        print(f"undocumented: {key} (read at {source}:{line})")
+    if arguments.junit:
+        write_junit(arguments.junit, keys, set(missing), extraction_missing)
+    return 1 if missing or extraction_missing else 0
 
 
 if __name__ == "__main__":
