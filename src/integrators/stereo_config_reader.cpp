@@ -40,7 +40,10 @@ void readEnum(const ParameterSource& source, const std::string& name, Parse pars
 }  // namespace
 
 VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source) {
-  VisibilityStereoConfig config;
+  // The named set first; every key below overrides its value.
+  StereoParameterSet set = StereoParameterSet::kTableI;
+  readEnum(source, "parameter_set", stereoParameterSetFromString, &set);
+  VisibilityStereoConfig config = visibilityStereoConfigFor(set);
   readEnum(source, "method", stereoIntegrationMethodFromString, &config.method);
   read(source, "prob_hit_visible_occupied", &config.prob_hit_visible_occupied);
   read(source, "prob_hit_visible_free", &config.prob_hit_visible_free);

@@ -38,6 +38,27 @@ UnknownNeighbours unknownNeighboursFromString(const std::string& name) {
   throw std::invalid_argument("unknown_neighbours must be known_only or prior, not '" + name + "'");
 }
 
+std::string toString(StereoParameterSet set) {
+  return set == StereoParameterSet::kFastExpansion ? "fast_expansion" : "table_i";
+}
+
+StereoParameterSet stereoParameterSetFromString(const std::string& name) {
+  if (name == "table_i") return StereoParameterSet::kTableI;
+  if (name == "fast_expansion") return StereoParameterSet::kFastExpansion;
+  throw std::invalid_argument("parameter set must be table_i or fast_expansion, not '" + name +
+                              "'");
+}
+
+VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set) {
+  VisibilityStereoConfig config;  // Table I
+  if (set == StereoParameterSet::kFastExpansion) {
+    // See StereoParameterSet: deeper rays into unknown space, stronger partial-visibility misses.
+    config.visibility_min = 0.003;
+    config.prob_hit_invisible = 0.2;
+  }
+  return config;
+}
+
 namespace {
 
 void requireOpenUnit(double value, const char* field) {

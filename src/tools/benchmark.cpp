@@ -276,6 +276,7 @@ const std::vector<Workload>& workloads() {
       {"disparity-artifacts",
        "[--part all|artifacts|fig5a|sweep] [--frames N] [--resolution R] [--fig5a_updates U]\n"
        "      [--unknown_neighbours prior|known_only] [--unknown_neighbour_occupancy P] [--images DIR]\n"
+       "      [--parameter_set table_i|fast_expansion]\n"
        "      [--q_max Q] [--q_min Q] [--p_visible_occluded P] [--p_hit_invisible P]\n"
        "      Schauwecker & Zell Sec. IV-A on the simulated corridor with correlated disparity\n"
        "      errors: false-occupied voxels and surface coverage of the visibility method, the\n"
@@ -283,7 +284,7 @@ const std::vector<Workload>& workloads() {
        "      sweep: the last four (and --resolution) as comma lists, one line per combination",
        {"part", "frames", "resolution", "fig5a_updates", "unknown_neighbours",
         "unknown_neighbour_occupancy", "images", "q_max", "q_min", "p_visible_occluded",
-        "p_hit_invisible"},
+        "p_hit_invisible", "parameter_set"},
        runDisparityArtifacts},
   };
   return table;

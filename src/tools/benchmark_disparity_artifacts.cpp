@@ -237,7 +237,8 @@ cv::Mat plotGrowth(const std::vector<Curve>& curves, int updates) {
 // The visibility method's parameters from the command line, each over the defaults (with
 // `lists`, the sweep's, the four swept parameters are left to runSweep).
 VisibilityStereoConfig configFrom(const CommandLine& args, bool lists) {
-  VisibilityStereoConfig config;
+  VisibilityStereoConfig config = visibilityStereoConfigFor(
+      stereoParameterSetFromString(args.value("parameter_set", "table_i")));
   config.unknown_neighbours = unknownNeighboursFromString(
       args.value("unknown_neighbours", toString(config.unknown_neighbours)));
   config.unknown_neighbour_occupancy =

@@ -80,6 +80,30 @@ struct VisibilityStereoConfig {
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
+// Named parameter sets of the visibility method. Sec. IV-A: the map's expansion into unknown
+// space "strongly depends on the voxel size, q_max and P(V_vi | V_vi-1, C) ... one can choose a
+// compromise between the speed of the map expansion and map quality". Measured on the simulated
+// corridor (eval/stereo_corridor.h; docs/disparity_method.md, "Expansion against artifacts").
+enum class StereoParameterSet {
+  // The paper's Table I (the in-class defaults of VisibilityStereoConfig): about 1/13 of OctoMap's
+  // false-occupied voxels but 0.75 of its surface coverage after 80 frames, since a ray stops
+  // ~4 voxels into unknown space (0.6^n < q_min = 0.1) and a new view is mapped gradually.
+  kTableI,
+  // Table I with q_min = 0.003 and P(H | not V) = 0.2: a ray goes ~11 voxels into unknown space
+  // (0.6^11 < 0.003), and a miss at partial visibility carries more evidence (an invisible
+  // voxel's miss is less certain). q_max and P(V | C, V) stay at Table I's values: the swept
+  // alternatives that raise the unknown-space factor 0.5 + 0.5 P(V | C, V) to q_max make unknown
+  // space transparent, a cliff to 4-5x OctoMap's false-occupied voxels; these two keep a margin
+  // of 0.1 from it. Corridor, 0.2 m: 0.11 of OctoMap's false-occupied voxels at 0.935 of its
+  // coverage (80 frames), 0.07 at 0.935 (200 frames).
+  kFastExpansion,
+};
+std::string toString(StereoParameterSet set);
+StereoParameterSet stereoParameterSetFromString(
+    const std::string& name);  // table_i | fast_expansion
+// The configuration of a named parameter set (every other field at the in-class defaults).
+VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set);
+
 // Phi, the standard normal CDF, tabulated with linear interpolation (Sec. III-D
 // pre-computes P(I_v) = Phi((z_q - z) / sigma_z) over depth and distance; with
 // sigma_z folded into the argument the same table needs one dimension). Outside

@@ -15,8 +15,9 @@ namespace occupancy_fusion {
 // Every parameter lives under this prefix ("stereo/method", ...).
 inline const std::string kStereoParameterPrefix = "stereo/";
 
-// Reads, under stereo/ (absent keys keep VisibilityStereoConfig's in-class defaults, i.e. the
-// paper's Table I):
+// Reads, under stereo/ (absent keys keep the values of parameter_set, by default the in-class
+// defaults, i.e. the paper's Table I):
+//   parameter_set                   table_i | fast_expansion (StereoParameterSet), read first
 //   method                          visibility | octomap
 //   prob_hit_visible_occupied       P(H | V, O)
 //   prob_hit_visible_free           P(H | V, not O)

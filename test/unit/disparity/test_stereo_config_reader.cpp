@@ -148,6 +148,26 @@ TEST(StereoConfigReader, ErrorsNameTheParameter) {
             std::string::npos);
 }
 
+// A named set is read first and the keys override it.
+TEST(StereoConfigReader, ParameterSetThenKeys) {
+  const VisibilityStereoConfig fast = readFrom({{"stereo/parameter_set", "fast_expansion"}});
+  EXPECT_DOUBLE_EQ(fast.visibility_min, 0.003);
+  EXPECT_DOUBLE_EQ(fast.prob_hit_invisible, 0.2);
+  EXPECT_DOUBLE_EQ(fast.visibility_max, 0.7);  // the rest is Table I
+  EXPECT_DOUBLE_EQ(fast.prob_visible_if_occluded, 0.2);
+  const VisibilityStereoConfig overridden =
+      readFrom({{"stereo/parameter_set", "fast_expansion"}, {"stereo/visibility_min", "0.01"}});
+  EXPECT_DOUBLE_EQ(overridden.visibility_min, 0.01);
+  EXPECT_DOUBLE_EQ(overridden.prob_hit_invisible, 0.2);
+  const VisibilityStereoConfig table_i = readFrom({{"stereo/parameter_set", "table_i"}});
+  EXPECT_DOUBLE_EQ(table_i.visibility_min, 0.1);
+  EXPECT_DOUBLE_EQ(table_i.prob_hit_invisible, 0.05);
+  EXPECT_NE(messageOf([] {
+              readFrom({{"stereo/parameter_set", "fast"}});
+            }).find("stereo/parameter_set"),
+            std::string::npos);
+}
+
 // The shipped YAML file: every stereo/ key is one the reader knows, Table I's values are its
 // values, and it parses into a valid configuration.
 TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
@@ -155,7 +175,8 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
       std::filesystem::path(__FILE__).parent_path() / "../../../config/disparity_mapper.yaml";
   std::map<std::string, std::string> values;
   flatten(YAML::LoadFile(file.string()), "", &values);
-  const std::vector<std::string> known = {"method",
+  const std::vector<std::string> known = {"parameter_set",
+                                          "method",
                                           "prob_hit_visible_occupied",
                                           "prob_hit_visible_free",
                                           "prob_hit_invisible",
@@ -178,7 +199,10 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
     const std::string name = key.substr(kStereoParameterPrefix.size());
     EXPECT_NE(std::find(known.begin(), known.end(), name), known.end()) << key;
   }
-  EXPECT_EQ(stereo_keys, known.size());
+  // The two keys fast_expansion sets are commented out in the file, so the set takes effect.
+  EXPECT_EQ(stereo_keys, known.size() - 2);
+  EXPECT_EQ(values.count("stereo/visibility_min"), 0u);
+  EXPECT_EQ(values.count("stereo/prob_hit_invisible"), 0u);
   const VisibilityStereoConfig from_file = readFrom(values);
   const VisibilityStereoConfig defaults;
   EXPECT_EQ(from_file.method, defaults.method);
