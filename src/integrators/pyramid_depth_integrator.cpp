@@ -249,6 +249,7 @@ OffsetLogOddsTable::OffsetLogOddsTable(const DepthInverseModel& model)
   if (!model.logOddsAtOffset(0.0)) return;
   const auto samples = static_cast<std::size_t>(2.0 * limit_ * kSamplesPerSigma) + 1;
   values_.resize(samples);
+  last_interval_ = static_cast<int>(samples) - 2;
   for (std::size_t i = 0; i < samples; ++i) {
     values_[i] = static_cast<float>(
         *model.logOddsAtOffset(static_cast<double>(i) / kSamplesPerSigma - limit_));
@@ -272,10 +273,16 @@ float DepthInverseModel::logOdds(double distance, double measured) const {
 DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
                                  double t0, int levels, double max_range,
                                  PyramidSelection selection)
-    : thresholds_(std::max(levels, 1)), scales_(thresholds_.size()), layers_(thresholds_.size()) {
+    : thresholds_(std::max(levels, 1)),
+      scales_(thresholds_.size()),
+      inverse_gaps_(thresholds_.size(), 0.0),
+      layers_(thresholds_.size()) {
   for (std::size_t level = 0; level < thresholds_.size(); ++level) {
     thresholds_[level] = t0 / static_cast<double>(1 << level);
     scales_[level] = 1.0 / static_cast<double>(1 << level);
+  }
+  for (std::size_t level = 0; level + 1 < thresholds_.size(); ++level) {
+    inverse_gaps_[level] = 1.0 / (thresholds_[level + 1] - thresholds_[level]);
   }
   camera.validate();
   depth.validateAgainst(camera);
@@ -552,12 +559,17 @@ int floorToInt(double x) {
 bool PyramidDepthIntegrator::projectIntoImage(const CameraIntrinsics& camera,
                                               const Eigen::Vector3d& point, double* u, double* v,
                                               double* distance) const {
-  *distance = point.norm();
-  if (*distance < config_.min_range || point.z() <= 0.0) return false;
+  // The image test first: it rejects most voxels of the frustum's border blocks without the
+  // square root.
+  if (point.z() <= 0.0) return false;
   const double inverse_z = 1.0 / point.z();  // Eq. 13
   *u = camera.fx * point.x() * inverse_z + camera.cx;
   *v = camera.fy * point.y() * inverse_z + camera.cy;
-  return *u >= -0.5 && *u < camera.width - 0.5 && *v >= -0.5 && *v < camera.height - 0.5;
+  if (!(*u >= -0.5 && *u < camera.width - 0.5 && *v >= -0.5 && *v < camera.height - 0.5)) {
+    return false;
+  }
+  *distance = point.norm();
+  return *distance >= config_.min_range;
 }
 
 float PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
@@ -603,7 +615,9 @@ PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(const Dep
     result.weights[i] = valid ? weights[i] : 0.0;
     result.measured[i] = valid ? measured : static_cast<float>(distance);
     result.weight_sum += result.weights[i];
+    result.complete = result.complete && valid;
     result.informs = result.informs || (valid && model_.informs(distance, measured));
+    result.nearest = valid && measured < result.nearest ? measured : result.nearest;
   }
   return result;
 }
@@ -613,7 +627,9 @@ float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells, double di
   for (int i = 0; i < 4; ++i) {
     weighted += cells.weights[i] * cellLogOdds(distance, cells.measured[i]);  // Eq. 16
   }
-  return static_cast<float>(weighted / cells.weight_sum);
+  // With all four cells valid the weights sum to 1 (up to rounding): no division, which is
+  // on the voxel's critical path.
+  return static_cast<float>(cells.complete ? weighted : weighted / cells.weight_sum);
 }
 
 float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, double u, double v,
@@ -624,21 +640,23 @@ float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, double u, 
   if (level < 0 || level + 1 >= pyramid.levels()) {
     const LayerCells only = gatherCells(frame, std::max(level, 0), u, v, distance);
     if (!only.valid() || !only.informs) return kNaN;
+    if (farInFront(distance, only.nearest)) return model_.farInFrontLogOdds();
     return bilinearLogOdds(only, distance);
   }
   const LayerCells fine = gatherCells(frame, level, u, v, distance);
   const LayerCells coarse = gatherCells(frame, level + 1, u, v, distance);
   if (!(fine.informs || coarse.informs)) return kNaN;
+  if (farInFront(distance, std::min(fine.nearest, coarse.nearest))) {
+    return model_.farInFrontLogOdds();
+  }
   if (!fine.valid()) return bilinearLogOdds(coarse, distance);
   if (!coarse.valid()) return bilinearLogOdds(fine, distance);
   const float fine_log_odds = bilinearLogOdds(fine, distance);  // float: Eq. 17 subtracts in float
   const float coarse_log_odds = bilinearLogOdds(coarse, distance);
-  const double t_fine = pyramid.threshold(level);
-  const double t_coarse = pyramid.threshold(level + 1);
   // Eq. 17: l^i at z = t_i, l^{i+1} at z = t_{i+1}, linear in between.
-  return static_cast<float>(fine_log_odds + (distance - t_fine) *
-                                                (coarse_log_odds - fine_log_odds) /
-                                                (t_coarse - t_fine));
+  return static_cast<float>(fine_log_odds + (distance - pyramid.threshold(level)) *
+                                                (coarse_log_odds - fine_log_odds) *
+                                                pyramid.inverseGap(level));
 }
 
 float PyramidDepthIntegrator::andertLogOdds(const DepthFrame& frame, double u, double v,
