@@ -283,16 +283,9 @@ bool MapPublisher::onClearBox(BoundingBoxQuery::Request& request,
 bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
   const std::string prefix = request.prefix.empty() ? config_.save_prefix : request.prefix;
   try {
-    const std::string bt_path = prefix + ".bt";
-    writeBt(map_->voxels(), bt_path);
-    response.files.push_back(bt_path);
-    FusedGridView view(config_.grid);
-    const OccupancyRaster raster = view.update(map_->voxels(), &map_->layer());
-    writeMapServerFiles(raster, prefix);  // throws for an empty map, after the .bt is written
-    response.files.push_back(prefix + ".pgm");
-    response.files.push_back(prefix + ".yaml");
+    saveMapFiles(*map_, config_.grid, prefix, &response.files);
     response.success = true;
-    response.message = "saved map '" + map_->name() + "' as " + prefix + ".{bt,pgm,yaml}";
+    response.message = "saved map '" + map_->name() + "' as " + prefix + ".{ot,bt,pgm,yaml}";
     ROS_INFO("%s: %s", name_.c_str(), response.message.c_str());
   } catch (const std::exception& error) {
     response.success = false;
@@ -300,6 +293,43 @@ bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
     ROS_ERROR("%s: saving the map to '%s' failed: %s", name_.c_str(), prefix.c_str(), error.what());
   }
   return true;
+}
+
+void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
+                  std::vector<std::string>* written) {
+  // One read of the voxels for both OctoMap files, and the 2D grid, before any file is touched:
+  // a map that cannot be saved (empty) leaves the previous files of this prefix as they were.
+  std::size_t skipped_voxels = 0;
+  const std::unique_ptr<octomap::OcTree> tree = toOcTree(map.voxels(), &skipped_voxels);
+  FusedGridView view(grid);
+  const OccupancyRaster raster = view.update(map.voxels(), &map.layer());
+  if (raster.empty()) {
+    throw std::runtime_error("map '" + map.name() +
+                             "' has no known voxel in the height band and no 2D cell: nothing "
+                             "written, existing files of " +
+                             prefix + " kept");
+  }
+  if (skipped_voxels > 0) {
+    ROS_WARN(
+        "saving map '%s': %zu voxels lie outside OctoMap's 16-bit key range and are not in "
+        "the .ot/.bt files",
+        map.name().c_str(), skipped_voxels);
+  }
+  const std::string ot_path = prefix + ".ot";
+  writeFileAtomically(ot_path, [&](std::ostream& out) {
+    if (!tree->write(out)) throw std::runtime_error("liboctomap failed to serialise the tree");
+  });
+  written->push_back(ot_path);
+  const std::string bt_path = prefix + ".bt";
+  writeFileAtomically(bt_path, [&](std::ostream& out) {
+    // writeBinary prunes the tree to maximum likelihood, which is why the .ot is written first.
+    if (!tree->writeBinary(out))
+      throw std::runtime_error("liboctomap failed to serialise the tree");
+  });
+  written->push_back(bt_path);
+  writeMapServerFiles(raster, prefix);
+  written->push_back(prefix + ".pgm");
+  written->push_back(prefix + ".yaml");
 }
 
 }  // namespace occupancy_fusion

@@ -282,7 +282,7 @@ TEST(SimPointCloudMapping, SaveMapWritesReadableFiles) {
   save.request.prefix = (folder / "room").string();
   ASSERT_TRUE(ros::service::call("/map_server/save_map", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
-  EXPECT_EQ(save.response.files.size(), 3u);
+  EXPECT_EQ(save.response.files.size(), 4u);  // .ot, .bt, .pgm, .yaml
 
   // .bt: liboctomap reads it, with as many occupied voxels as were published.
   octomap::OcTree tree(save.request.prefix + ".bt");

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
@@ -22,7 +23,7 @@ namespace occupancy_fusion {
 
 struct MapPublisherConfig {
   double publish_rate = 1.0;        // Hz, how often watched outputs are refreshed
-  std::string save_prefix = "map";  // ~save_map with an empty prefix writes <save_prefix>.bt etc.
+  std::string save_prefix = "map";  // ~save_map with an empty prefix writes <save_prefix>.ot etc.
   FusedGridConfig grid;             // occupancy_min_z / occupancy_max_z
 
   void validate() const;  // throws std::invalid_argument naming the bad parameter
@@ -30,6 +31,16 @@ struct MapPublisherConfig {
 
 // publish_rate, save_prefix, occupancy_min_z, occupancy_max_z.
 MapPublisherConfig readMapPublisherConfig(const ParameterSource& source);
+
+// Saves the map as <prefix>.ot (every log-odds: what MapServer's ~load_map reads back exactly),
+// <prefix>.bt (occupied / free labels, for OctoMap tools) and <prefix>.pgm + <prefix>.yaml (the
+// fused 2D grid, map_server's format). Everything is computed before the first file is written and
+// every file is written atomically (temporary file, then rename), so each file on disk is either
+// its previous version or the complete new one. Safe while mappers write (reads take the map's
+// shared lock). Throws std::runtime_error naming the path, or naming the reason when nothing could
+// be written (an empty map); the files completed before a failure are appended to *written.
+void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
+                  std::vector<std::string>* written);
 
 // Wall time (ms) of the parts of the last publishing cycle, and what they handled. Outputs
 // without subscribers, or unchanged since they were last sent, cost nothing and report 0.

@@ -1,0 +1,254 @@
+// Nothing lost, end to end in a nodelet manager (map_persistence.test): the test node loads and
+// unloads MapServers through the manager's services, as `nodelet load` / `nodelet unload` do.
+//  1. MapServer A maps with the running PointCloudMapper; ~save_map reports failures clearly and
+//     keeps the previous files; unloading A saves the map (save_on_shutdown) while the mapper
+//     still writes.
+//  2. With every user gone (map freed), MapServer B starts with load_map: the published cloud is
+//     exactly the saved file's occupied voxels right after start, and B saves a byte-identical .ot.
+//  3. A bad load_map path stops the MapServer from loading.
+//  4. Mapping resumes on B's map: new frames update the loaded voxels, which stay.
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <nodelet/NodeletLoad.h>
+#include <nodelet/NodeletUnload.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/SetBool.h>
+
+#include "occupancy_fusion/SaveMap.h"
+#include "rostest_support.h"
+
+namespace occupancy_fusion {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kResolution = 0.05;  // config/point_cloud_mapper.yaml
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The last octomap_point_cloud_centers message, from a subscription made when asked.
+class CloudWatcher {
+ public:
+  void subscribe() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_.reset();
+    subscriber_ = ros::NodeHandle().subscribe("/octomap_point_cloud_centers", 1,
+                                              &CloudWatcher::onCloud, this);
+  }
+  void unsubscribe() { subscriber_.shutdown(); }
+  sensor_msgs::PointCloud2ConstPtr last() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return last_;
+  }
+
+ private:
+  void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_ = cloud;
+  }
+  mutable std::mutex mutex_;
+  ros::Subscriber subscriber_;
+  sensor_msgs::PointCloud2ConstPtr last_;
+};
+
+bool loadNodelet(const std::string& name, const std::string& type,
+                 const std::vector<std::pair<std::string, std::string>>& remappings = {}) {
+  nodelet::NodeletLoad load;
+  load.request.name = name;
+  load.request.type = type;
+  for (const auto& [from, to] : remappings) {
+    load.request.remap_source_args.push_back(from);
+    load.request.remap_target_args.push_back(to);
+  }
+  return ros::service::call("/manager/load_nodelet", load) && load.response.success;
+}
+
+bool unloadNodelet(const std::string& name) {
+  nodelet::NodeletUnload unload;
+  unload.request.name = name;
+  return ros::service::call("/manager/unload_nodelet", unload) && unload.response.success;
+}
+
+void setMapServerParameters(const std::string& name, const std::string& load_map,
+                            const std::string& save_on_shutdown, const std::string& save_prefix) {
+  ros::param::set(name + "/map_name", std::string("map"));
+  ros::param::set(name + "/resolution", kResolution);
+  ros::param::set(name + "/publish_rate", 5.0);
+  ros::param::set(name + "/load_map", load_map);
+  ros::param::set(name + "/save_on_shutdown", save_on_shutdown);
+  ros::param::set(name + "/save_prefix", save_prefix);
+}
+
+SaveMap save(const std::string& service, const std::string& prefix) {
+  SaveMap request;
+  request.request.prefix = prefix;
+  EXPECT_TRUE(ros::service::call(service, request)) << service;
+  return request;
+}
+
+// An .ot file as liboctomap reads it (OcTree's file constructor reads .bt only).
+std::unique_ptr<octomap::OcTree> readOt(const std::string& path) {
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(path));
+  auto* octree = dynamic_cast<octomap::OcTree*>(tree.get());
+  if (octree == nullptr) return nullptr;
+  tree.release();
+  return std::unique_ptr<octomap::OcTree>(octree);
+}
+
+// Occupied voxels of an OctoMap file (pruned leaves counted for every voxel they cover).
+double occupiedVoxels(const octomap::OcTree& tree) {
+  double count = 0.0;
+  for (auto leaf = tree.begin_leafs(); leaf != tree.end_leafs(); ++leaf) {
+    if (tree.isNodeOccupied(*leaf)) count += std::pow(leaf.getSize() / tree.getResolution(), 3);
+  }
+  return count;
+}
+
+TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
+  const fs::path folder =
+      fs::temp_directory_path() / ("occupancy_fusion_persistence_" + std::to_string(getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string a = (folder / "a").string();
+  CloudWatcher watcher;
+
+  ASSERT_TRUE(ros::service::waitForService("/manager/load_nodelet", ros::Duration(20.0)));
+  // 1. MapServer A on the map the PointCloudMapper fills.
+  setMapServerParameters("/map_server_a", "", a, (folder / "unused").string());
+  ASSERT_TRUE(loadNodelet("/map_server_a", "occupancy_fusion/MapServer"));
+  watcher.subscribe();
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        const auto cloud = watcher.last();
+        return cloud && cloud->width * cloud->height >= 2000;
+      },
+      40.0))
+      << "the mapper did not fill the map";
+
+  // A failed save names the file and keeps what was there: <prefix>.ot is taken by a folder, so
+  // the first file fails and the older .bt beside it is not touched.
+  const std::string taken = (folder / "taken").string();
+  fs::create_directories(taken + ".ot/inside");
+  { std::ofstream(taken + ".bt") << "previous"; }
+  const SaveMap failed = save("/map_server_a/save_map", taken);
+  EXPECT_FALSE(failed.response.success);
+  EXPECT_NE(failed.response.message.find(taken + ".ot"), std::string::npos)
+      << failed.response.message;
+  EXPECT_TRUE(failed.response.files.empty());
+  EXPECT_EQ(readBytes(taken + ".bt"), "previous");
+  EXPECT_TRUE(fs::is_directory(taken + ".ot/inside"));
+  const std::string missing = (folder / "no_such_folder" / "map").string();
+  const SaveMap unwritable = save("/map_server_a/save_map", missing);
+  EXPECT_FALSE(unwritable.response.success);
+  EXPECT_NE(unwritable.response.message.find(missing + ".ot"), std::string::npos)
+      << unwritable.response.message;
+
+  // Unloading A saves the map while the mapper keeps writing to it.
+  ASSERT_TRUE(unloadNodelet("/map_server_a"));
+  for (const char* extension : {".ot", ".bt", ".pgm", ".yaml"}) {
+    EXPECT_TRUE(fs::exists(a + extension)) << a + extension;
+  }
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+  }
+  const std::unique_ptr<octomap::OcTree> saved_tree = readOt(a + ".ot");
+  ASSERT_NE(saved_tree, nullptr);
+  const octomap::OcTree& saved = *saved_tree;
+  ASSERT_NEAR(saved.getResolution(), kResolution, 1e-12);
+  const double saved_occupied = occupiedVoxels(saved);
+  EXPECT_GE(saved_occupied, 2000.0);
+
+  // 2. Everyone leaves: the map is freed. B starts on an empty manager with load_map.
+  ASSERT_TRUE(unloadNodelet("/point_cloud_mapper"));
+  ASSERT_TRUE(unloadNodelet("/simulator"));
+  const std::string b = (folder / "b").string();
+  setMapServerParameters("/map_server_b", a + ".ot", "", b);
+  watcher.subscribe();
+  ASSERT_TRUE(loadNodelet("/map_server_b", "occupancy_fusion/MapServer"));
+  ASSERT_TRUE(waitUntil([&] { return watcher.last() != nullptr; }, 10.0));
+  // Right after start, the published cloud is exactly the file's occupied voxels.
+  const std::vector<Eigen::Vector3d> points = cloudPoints(*watcher.last());
+  EXPECT_EQ(static_cast<double>(points.size()), saved_occupied);
+  std::size_t not_occupied_in_file = 0;
+  for (const Eigen::Vector3d& p : points) {
+    const octomap::OcTreeNode* node = saved.search(p.x(), p.y(), p.z());
+    if (node == nullptr || !saved.isNodeOccupied(node)) ++not_occupied_in_file;
+  }
+  EXPECT_EQ(not_occupied_in_file, 0u);
+  // Every log-odds came back exactly: saving again gives the same file, byte for byte.
+  const SaveMap resaved = save("/map_server_b/save_map", "");
+  ASSERT_TRUE(resaved.response.success) << resaved.response.message;
+  EXPECT_EQ(resaved.response.files.size(), 4u);
+  EXPECT_EQ(readBytes(b + ".ot"), readBytes(a + ".ot"));
+
+  // 3. A file that is not there: the MapServer refuses to start.
+  setMapServerParameters("/map_server_c", (folder / "absent.ot").string(), "", b);
+  ros::param::set("/map_server_c/map_name", std::string("other"));
+  EXPECT_FALSE(loadNodelet("/map_server_c", "occupancy_fusion/MapServer"));
+  // A file cut in the middle (an interrupted copy) is refused too, not resumed in part.
+  const std::string whole = readBytes(a + ".ot");
+  const std::string cut = (folder / "cut.ot").string();
+  { std::ofstream(cut, std::ios::binary) << whole.substr(0, whole.size() / 2); }
+  ros::param::set("/map_server_c/load_map", cut);
+  EXPECT_FALSE(loadNodelet("/map_server_c", "occupancy_fusion/MapServer"));
+
+  // 4. Mapping resumes on the loaded map: restart the simulator and the mapper.
+  const std::size_t loaded_points = points.size();
+  ASSERT_TRUE(loadNodelet("/simulator", "occupancy_fusion/Simulator"));
+  ASSERT_TRUE(loadNodelet("/point_cloud_mapper", "occupancy_fusion/PointCloudMapper",
+                          {{"/cloud_in", "/camera/depth/points"}}));
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        const auto cloud = watcher.last();
+        return cloud && cloud->width * cloud->height >= loaded_points + 200;
+      },
+      40.0))
+      << "mapping did not resume";
+  const std::string c = (folder / "c").string();
+  const SaveMap resumed = save("/map_server_b/save_map", c);
+  ASSERT_TRUE(resumed.response.success) << resumed.response.message;
+  const std::unique_ptr<octomap::OcTree> after_tree = readOt(c + ".ot");
+  ASSERT_NE(after_tree, nullptr);
+  const octomap::OcTree& after = *after_tree;
+  // The loaded voxels are still there (the robot sees the same room again), and new frames
+  // changed the log-odds of many of them.
+  std::size_t kept_occupied = 0, changed = 0, loaded = 0;
+  for (auto leaf = saved.begin_leafs(); leaf != saved.end_leafs(); ++leaf) {
+    if (!saved.isNodeOccupied(*leaf) || leaf.getDepth() != saved.getTreeDepth()) continue;
+    ++loaded;
+    const octomap::OcTreeNode* node = after.search(leaf.getKey());
+    if (node == nullptr) continue;
+    if (after.isNodeOccupied(node)) ++kept_occupied;
+    if (node->getLogOdds() != leaf->getLogOdds()) ++changed;
+  }
+  ASSERT_GT(loaded, 1000u);
+  EXPECT_GE(static_cast<double>(kept_occupied) / loaded, 0.9);
+  EXPECT_GE(changed, loaded / 10);
+  watcher.unsubscribe();
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "map_persistence_test");
+  ros::NodeHandle node_handle;
+  return occupancy_fusion::runTestsWhileSpinning();
+}
