@@ -169,7 +169,7 @@ TEST(VoxelMapMemoryBound, MovingSensorEvictsFarthestBlocksAndStaysFlat) {
   }
   RecordProperty("early_frame_cpu_us", static_cast<int>(early / 40 * 1e6));
   RecordProperty("late_frame_cpu_us", static_cast<int>(late / 40 * 1e6));
-  EXPECT_LE(late / 40, 3.0 * early / 40 + 200e-6)
+  EXPECT_LE(late / 40, 3.0 * early / 40 + 50e-6)
       << "early " << early / 40 * 1e6 << " us, late " << late / 40 * 1e6 << " us per frame";
 }
 
