@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iostream>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -12,6 +13,8 @@ namespace occupancy_fusion {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Malformed lines named one by one on stderr; the rest only counted.
+constexpr std::size_t kNamedSkippedLines = 5;
 
 // A 180 degree field of view: n beams span pi, either with n - 1 gaps (odd n)
 // or n (even n).
@@ -102,16 +105,22 @@ parseCarmenFlaserLine(const std::string &line, const CarmenReadConfig &config) {
         out.odom_theta)) {
     throw std::runtime_error("FLASER: missing pose");
   }
+  if (!(std::isfinite(out.x) && std::isfinite(out.y) &&
+        std::isfinite(out.theta))) {
+    throw std::runtime_error("FLASER: pose is not finite");
+  }
   if (!(in >> out.ipc_timestamp >> out.hostname >> out.logger_timestamp)) {
     throw std::runtime_error("FLASER: missing timestamps or hostname");
   }
   return out;
 }
 
-std::vector<CarmenLaserScan> readCarmenLog(const std::string &path,
-                                           const CarmenReadConfig &config) {
+std::vector<CarmenLaserScan>
+readCarmenLog(const std::string &path, const CarmenReadConfig &config,
+              std::vector<CarmenSkippedLine> *skipped_lines) {
   config.validate();
   std::vector<CarmenLaserScan> scans;
+  std::vector<CarmenSkippedLine> skipped;
   std::size_t line_number = 0;
   forEachLine(path, [&](const std::string &line) {
     ++line_number;
@@ -122,11 +131,30 @@ std::vector<CarmenLaserScan> readCarmenLog(const std::string &path,
         scans.push_back(std::move(*scan));
       }
     } catch (const std::runtime_error &error) {
-      throw std::runtime_error(path + ":" + std::to_string(line_number) + ": " +
-                               error.what());
+      // One corrupt line (a truncated write, a bad sector) must not cost the
+      // whole log: skip it, name it, and count it.
+      skipped.push_back({line_number, error.what()});
+      if (skipped.size() <= kNamedSkippedLines) {
+        std::cerr << "warning: " << path << ":" << line_number << ": "
+                  << error.what() << ": line skipped\n";
+      }
     }
     return config.max_scans == 0 || scans.size() < config.max_scans;
   });
+  if (!skipped.empty()) {
+    if (scans.empty()) {
+      throw std::runtime_error(path + ":" +
+                               std::to_string(skipped.front().line_number) +
+                               ": " + skipped.front().reason + " (" +
+                               std::to_string(skipped.size()) +
+                               " malformed FLASER lines, no valid one)");
+    }
+    std::cerr << "warning: " << path << ": " << skipped.size()
+              << " malformed FLASER line(s) skipped, " << scans.size()
+              << " read\n";
+  }
+  if (skipped_lines != nullptr)
+    *skipped_lines = std::move(skipped);
   return scans;
 }
 

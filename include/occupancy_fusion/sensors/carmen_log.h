@@ -47,11 +47,21 @@ struct CarmenReadConfig {
 std::optional<CarmenLaserScan>
 parseCarmenFlaserLine(const std::string &line, const CarmenReadConfig &config);
 
+// A malformed FLASER line that readCarmenLog skipped.
+struct CarmenSkippedLine {
+  std::size_t line_number = 0; // 1-based
+  std::string reason;          // what parseCarmenFlaserLine found wrong
+};
+
 // Reads every FLASER line of a log, in file order. A name ending in ".gz" is
-// decompressed with `gzip -dc`. Throws std::runtime_error if the file cannot be
-// read or a FLASER line is malformed (the message names the line number).
+// decompressed with `gzip -dc`. A malformed FLASER line is skipped with a
+// warning on stderr naming its line (the first few; then a count), and listed
+// in `skipped_lines` when given. Throws std::runtime_error if the file cannot
+// be read, or if FLASER lines were malformed and none was valid (the message
+// names the first bad line).
 std::vector<CarmenLaserScan>
 readCarmenLog(const std::string &path,
-              const CarmenReadConfig &config = CarmenReadConfig());
+              const CarmenReadConfig &config = CarmenReadConfig(),
+              std::vector<CarmenSkippedLine> *skipped_lines = nullptr);
 
 } // namespace occupancy_fusion

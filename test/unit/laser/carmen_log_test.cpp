@@ -82,5 +82,42 @@ TEST(CarmenLog, ReadsPlainAndGzippedFiles) {
   std::remove((path + ".gz").c_str());
 }
 
+TEST(CarmenLog, SkipsMalformedLinesNamingThem) {
+  const std::string path = testing::TempDir() + "carmen_log_malformed.log";
+  {
+    std::ofstream out(path);
+    out << flaser(180, 1.0, 0.5) << "\n"
+        << "FLASER 180 1.0 2.0\n" // truncated: line 2
+        << flaser(180, 2.0, 1.5) << "\n"
+        << "FLASER x\n" // no beam count: line 4
+        << flaser(180, 3.0, 2.5) << "\n";
+  }
+  std::vector<CarmenSkippedLine> skipped;
+  const auto scans = readCarmenLog(path, CarmenReadConfig(), &skipped);
+  // The valid lines are read as if the bad ones were not there.
+  ASSERT_EQ(scans.size(), 3u);
+  EXPECT_EQ(scans[1].line_number, 3u);
+  EXPECT_DOUBLE_EQ(scans[2].x, 2.5);
+  ASSERT_EQ(skipped.size(), 2u);
+  EXPECT_EQ(skipped[0].line_number, 2u);
+  EXPECT_NE(skipped[0].reason.find("fewer ranges"), std::string::npos);
+  EXPECT_EQ(skipped[1].line_number, 4u);
+  EXPECT_NE(skipped[1].reason.find("beam count"), std::string::npos);
+
+  // Nothing valid left: an error naming the first bad line.
+  {
+    std::ofstream out(path);
+    out << "PARAM x 0\nFLASER 180 1.0\n";
+  }
+  try {
+    readCarmenLog(path);
+    FAIL() << "a log of malformed lines only must not read as empty";
+  } catch (const std::runtime_error &error) {
+    EXPECT_NE(std::string(error.what()).find(path + ":2:"), std::string::npos)
+        << error.what();
+  }
+  std::remove(path.c_str());
+}
+
 } // namespace
 } // namespace occupancy_fusion
