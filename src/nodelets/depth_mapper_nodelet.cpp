@@ -31,110 +31,10 @@
 
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/params/depth_config_reader.h"
+#include "occupancy_fusion/ros/depth_messages.h"
 #include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
 namespace occupancy_fusion {
-namespace {
-
-// Why an image was not integrated; each reason has its own counter in the diagnostics.
-class DroppedImage : public std::runtime_error {
- public:
-  enum class Reason { kEncoding, kCameraInfo };
-  DroppedImage(Reason reason, const std::string& message)
-      : std::runtime_error(message), reason_(reason) {}
-  Reason reason() const { return reason_; }
-
- private:
-  Reason reason_;
-};
-
-bool hostIsBigEndian() {
-  const std::uint16_t probe = 1;
-  std::uint8_t first_byte = 0;
-  std::memcpy(&first_byte, &probe, 1);
-  return first_byte == 0;
-}
-
-// The image's pixels as z-depth in metres, in `storage` when they need converting or copying.
-DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>* storage) {
-  namespace enc = sensor_msgs::image_encodings;
-  const bool millimetres = image.encoding == enc::TYPE_16UC1 || image.encoding == enc::MONO16;
-  const bool metres = image.encoding == enc::TYPE_32FC1;
-  if (!millimetres && !metres) {
-    throw DroppedImage(
-        DroppedImage::Reason::kEncoding,
-        "encoding '" + image.encoding + "' is not a depth encoding (16UC1 in mm or 32FC1 in m)");
-  }
-  if (static_cast<bool>(image.is_bigendian) != hostIsBigEndian()) {
-    throw DroppedImage(DroppedImage::Reason::kEncoding,
-                       "encoding '" + image.encoding + "' with foreign byte order");
-  }
-  const std::size_t pixel_bytes = millimetres ? 2 : 4;
-  if (image.step < image.width * pixel_bytes ||
-      image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
-    throw DroppedImage(DroppedImage::Reason::kEncoding,
-                       "encoding '" + image.encoding + "': step or data size too small");
-  }
-  const int width = static_cast<int>(image.width);
-  const int height = static_cast<int>(image.height);
-  if (metres && image.step % sizeof(float) == 0) {
-    // Zero copy: the message's buffer is suitably aligned (std::allocator) and rows are whole
-    // floats apart.
-    return {width, height, reinterpret_cast<const float*>(image.data.data()),
-            static_cast<int>(image.step / sizeof(float))};
-  }
-  const std::size_t row_bytes = static_cast<std::size_t>(width) * pixel_bytes;
-  if (metres) {  // rows padded to a step that is no whole number of floats
-    storage->resize(static_cast<std::size_t>(width) * height);
-    for (int v = 0; v < height; ++v) {
-      std::memcpy(storage->data() + static_cast<std::size_t>(v) * width,
-                  image.data.data() + static_cast<std::size_t>(v) * image.step, row_bytes);
-    }
-  } else {
-    std::vector<std::uint16_t> millimetres_dense(static_cast<std::size_t>(width) * height);
-    for (int v = 0; v < height; ++v) {
-      std::memcpy(millimetres_dense.data() + static_cast<std::size_t>(v) * width,
-                  image.data.data() + static_cast<std::size_t>(v) * image.step, row_bytes);
-    }
-    *storage = depthFromMillimetres(millimetres_dense.data(), millimetres_dense.size());
-  }
-  return {width, height, storage->data(), width};
-}
-
-// Intrinsics from K of a camera_info that must describe this very image.
-CameraIntrinsics intrinsicsFor(const sensor_msgs::CameraInfo& info,
-                               const sensor_msgs::Image& image) {
-  using Reason = DroppedImage::Reason;
-  if (info.width != image.width || info.height != image.height) {
-    throw DroppedImage(Reason::kCameraInfo, "camera_info is " + std::to_string(info.width) + "x" +
-                                                std::to_string(info.height) + " but the image " +
-                                                std::to_string(image.width) + "x" +
-                                                std::to_string(image.height));
-  }
-  if (info.binning_x > 1 || info.binning_y > 1 || info.roi.width != 0 || info.roi.height != 0) {
-    throw DroppedImage(Reason::kCameraInfo, "camera_info with binning or ROI is not supported");
-  }
-  CameraIntrinsics camera;
-  camera.width = static_cast<int>(info.width);
-  camera.height = static_cast<int>(info.height);
-  camera.fx = info.K[0];
-  camera.fy = info.K[4];
-  camera.cx = info.K[2];
-  camera.cy = info.K[5];
-  if (!(camera.fx > 0.0) || !(camera.fy > 0.0)) {
-    throw DroppedImage(Reason::kCameraInfo,
-                       "camera_info has focal length fx = " + std::to_string(camera.fx) +
-                           ", fy = " + std::to_string(camera.fy));
-  }
-  try {
-    camera.validate();
-  } catch (const std::invalid_argument& error) {
-    throw DroppedImage(Reason::kCameraInfo, std::string("camera_info: ") + error.what());
-  }
-  return camera;
-}
-
-}  // namespace
 
 class DepthMapper : public MapperNodeletBase {
  private:
@@ -195,8 +95,9 @@ class DepthMapper : public MapperNodeletBase {
     try {
       integrate(image, *info, *T_map_camera);
       return true;
-    } catch (const DroppedImage& error) {
-      countDropped(error.reason() == DroppedImage::Reason::kEncoding ? kEncoding : kBadCameraInfo);
+    } catch (const DepthImageRejected& error) {
+      countDropped(error.reason() == DepthImageRejected::Reason::kEncoding ? kEncoding
+                                                                           : kBadCameraInfo);
       NODELET_ERROR_THROTTLE(5.0, "depth image on '%s' dropped: %s",
                              image_subscriber_.getTopic().c_str(), error.what());
       return false;
@@ -205,7 +106,7 @@ class DepthMapper : public MapperNodeletBase {
 
   void integrate(const Image& image, const CameraInfo& info,
                  const Eigen::Isometry3d& T_map_camera) {
-    const CameraIntrinsics camera = intrinsicsFor(info, image);
+    const CameraIntrinsics camera = depthCameraIntrinsics(info, image);
     std::vector<float> storage;
     const DepthImageView depth = depthInMetres(image, &storage);
     last_stats_ = integrator_->integrate(depth, camera, T_map_camera, &map().voxels());

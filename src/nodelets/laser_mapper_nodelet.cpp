@@ -32,33 +32,6 @@ namespace {
 
 using ScanMessage = sensor_msgs::LaserScan;
 
-// The scan as the core reads it (angle_increment > 0: a driver's negative increment is the same
-// scan listed backwards). Throws std::invalid_argument naming the problem.
-LaserScan coreScan(const ScanMessage& message) {
-  const double increment = message.angle_increment;
-  if (!std::isfinite(increment) || increment == 0.0) {
-    throw std::invalid_argument("angle_increment is " + std::to_string(increment) +
-                                " (must be finite and non-zero)");
-  }
-  const std::size_t count = message.ranges.size();
-  if (count == 0) throw std::invalid_argument("no ranges");
-  // The last beam must point at angle_max (float fields: within half an increment).
-  const double last_angle = message.angle_min + (static_cast<double>(count) - 1.0) * increment;
-  if (!(std::abs(last_angle - message.angle_max) <= 0.5 * std::abs(increment))) {
-    const double expected = std::round((message.angle_max - message.angle_min) / increment) + 1.0;
-    throw std::invalid_argument(std::to_string(count) + " ranges, but angle_min, angle_max and " +
-                                "angle_increment describe " + std::to_string(expected) + " beams");
-  }
-  LaserScan scan = toLaserScan(message);
-  if (increment < 0.0) {
-    scan.angle_min = last_angle;
-    scan.angle_increment = -increment;
-    std::reverse(scan.ranges.begin(), scan.ranges.end());
-  }
-  scan.validate();
-  return scan;
-}
-
 bool isFinite(const Eigen::Isometry3d& pose) { return pose.matrix().allFinite(); }
 
 // Log-ratio sum (Eq. 8) of one scanner's grid into the fused grid; NaN means no information.
@@ -166,7 +139,7 @@ class LaserMapper : public MapperNodeletBase {
     const std::string& sensor_frame =
         source->config.sensor_frame.empty() ? message.header.frame_id : source->config.sensor_frame;
     try {
-      const LaserScan scan = coreScan(message);
+      const LaserScan scan = checkedLaserScan(message);
       // Both poses first, so a failed lookup leaves both products untouched.
       bool upside_in_vehicle = false, upside_in_map = false;
       const Pose2D in_vehicle =

@@ -1,5 +1,6 @@
 #include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "occupancy_fusion/ros/ros_parameter_source.h"
@@ -33,6 +34,7 @@ void MapperNodeletBase::setUpMapper(
 void MapperNodeletBase::startDiagnostics(const std::string& task_name,
                                          const std::vector<std::string>& drop_reasons,
                                          DiagnosticsTask fill) {
+  frames_.addDropReasons({kDuplicateStamp, kPoseNotFinite});
   frames_.addDropReasons(drop_reasons);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
                                                                getPrivateNodeHandle(), getName());
@@ -40,10 +42,56 @@ void MapperNodeletBase::startDiagnostics(const std::string& task_name,
   diagnostics_->add(task_name, [this, fill = std::move(fill)](
                                    diagnostic_updater::DiagnosticStatusWrapper& status) {
     frames_.fill(&status);
+    {
+      const std::lock_guard<std::mutex> lock(stamps_mutex_);
+      status.add("time jumps back (tf buffer cleared)", backwards_jumps_);
+    }
     fill(status);
   });
   diagnostics_timer_ = getNodeHandle().createTimer(
       ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+}
+
+void MapperNodeletBase::noteReceivedStamp(const std_msgs::Header& header) {
+  const std::lock_guard<std::mutex> lock(stamps_mutex_);
+  const auto newest = newest_received_.find(header.frame_id);
+  if (newest == newest_received_.end()) {
+    newest_received_.emplace(header.frame_id, header.stamp);
+    return;
+  }
+  const double back = (newest->second - header.stamp).toSec();
+  if (back <= kBackwardsJumpSeconds) {
+    newest->second = std::max(newest->second, header.stamp);
+    return;
+  }
+  ++backwards_jumps_;
+  tf_buffer_->clear();
+  // Every sensor starts over: their next (earlier) stamps are no second jump.
+  newest_received_ = {{header.frame_id, header.stamp}};
+  last_integrated_.clear();
+  NODELET_WARN_THROTTLE(5.0,
+                        "time jumped back by %.3f s in the stamps of '%s' (a looped bag?): tf "
+                        "buffer cleared, mapping goes on",
+                        back, header.frame_id.c_str());
+}
+
+bool MapperNodeletBase::isDuplicate(const std_msgs::Header& header) {
+  {
+    const std::lock_guard<std::mutex> lock(stamps_mutex_);
+    const auto last = last_integrated_.find(header.frame_id);
+    if (last == last_integrated_.end() || last->second != header.stamp) return false;
+  }
+  frames_.countDropped(kDuplicateStamp);
+  NODELET_WARN_THROTTLE(5.0,
+                        "frame of '%s' at %.6f has the stamp of the last one integrated: "
+                        "dropped as a duplicate",
+                        header.frame_id.c_str(), header.stamp.toSec());
+  return true;
+}
+
+void MapperNodeletBase::noteIntegratedStamp(const std_msgs::Header& header) {
+  const std::lock_guard<std::mutex> lock(stamps_mutex_);
+  last_integrated_[header.frame_id] = header.stamp;
 }
 
 const char* MapperNodeletBase::tfDropReason(

@@ -10,13 +10,16 @@
 
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
+#include <std_msgs/Header.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
@@ -60,14 +63,21 @@ class MapperNodeletBase : public nodelet::Nodelet {
       Input& input, const std::vector<std::string>& target_frames,
       std::function<bool(const Message&)> on_message,
       std::function<void(const Message&)> on_dropped) {
-    input.registerCallback([this](const typename Message::ConstPtr&) { frames_.countReceived(); });
+    // Registered before the filter connects to `input`, so a backwards jump clears the tf buffer
+    // before the filter asks it about the frame.
+    input.registerCallback([this](const typename Message::ConstPtr& message) {
+      frames_.countReceived();
+      noteReceivedStamp(message->header);
+    });
     auto filter = std::make_unique<tf2_ros::MessageFilter<Message>>(
         input, *tf_buffer_, target_frames.front(), queue_size_, getNodeHandle());
     filter->setTargetFrames(target_frames);
     filter->registerCallback(
         [this, on_message = std::move(on_message)](const typename Message::ConstPtr& message) {
           const auto start = std::chrono::steady_clock::now();
+          if (isDuplicate(message->header)) return;
           if (!on_message(*message)) return;
+          noteIntegratedStamp(message->header);
           frames_.countIntegrated(
               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                   .count());
@@ -100,21 +110,48 @@ class MapperNodeletBase : public nodelet::Nodelet {
   // so that each mapper keeps its own throttled warning.
   template <class Message>
   std::optional<Eigen::Isometry3d> poseInMap(const Message& message, const std::string& what) {
+    Eigen::Isometry3d pose;
     try {
-      return tf2::transformToEigen(tf_buffer_->lookupTransform(
+      pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
           map_->frameId(), message.header.frame_id, message.header.stamp));
     } catch (const tf2::TransformException& error) {
       frames_.countDropped(FrameStatistics::kTfLookup);
       NODELET_WARN_THROTTLE(5.0, "%s dropped: %s", what.c_str(), error.what());
       return std::nullopt;
     }
+    // tf2 refuses NaN transforms itself; this guards the integrators should one get through.
+    if (!pose.matrix().allFinite()) {
+      frames_.countDropped(kPoseNotFinite);
+      NODELET_WARN_THROTTLE(5.0, "%s dropped: pose of '%s' in '%s' is not finite", what.c_str(),
+                            message.header.frame_id.c_str(), map_->frameId().c_str());
+      return std::nullopt;
+    }
+    return pose;
   }
+
+  // Drop reasons every mapper has besides the tf ones.
+  static constexpr const char* kDuplicateStamp = "duplicate stamp";
+  static constexpr const char* kPoseNotFinite = "pose not finite";
+  // A sensor's stamp going back by more than this is a jump back in time (a looped bag), not
+  // reordering.
+  static constexpr double kBackwardsJumpSeconds = 1.0;
 
   SharedMap& map() const { return *map_; }
   int queueSize() const { return queue_size_; }
   const tf2_ros::Buffer& tfBuffer() const { return *tf_buffer_; }
 
  private:
+  // Detects time jumping backwards in a sensor's own stamps (a bag played in a loop without
+  // /clock; with /clock, tf2's TransformListener clears its buffer itself when ros::Time jumps
+  // back): the tf buffer, which would refuse the older transforms, is cleared and mapping goes
+  // on.
+  void noteReceivedStamp(const std_msgs::Header& header);
+  // A frame stamped exactly like the last one integrated from the same frame_id (a republished
+  // or duplicated message) is dropped, counted and warned about: integrating it would count the
+  // same evidence twice.
+  bool isDuplicate(const std_msgs::Header& header);
+  void noteIntegratedStamp(const std_msgs::Header& header);
+
   static const char* tfDropReason(tf2_ros::filter_failure_reasons::FilterFailureReason reason);
 
   std::shared_ptr<SharedMap> map_;
@@ -124,6 +161,10 @@ class MapperNodeletBase : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   FrameStatistics frames_;
+  std::mutex stamps_mutex_;
+  std::map<std::string, ros::Time> newest_received_;  // per frame_id
+  std::map<std::string, ros::Time> last_integrated_;  // per frame_id
+  std::size_t backwards_jumps_ = 0;                   // guarded by stamps_mutex_
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
 };

@@ -33,6 +33,23 @@ template <typename ScanLike> LaserScan toLaserScan(const ScanLike &in) {
   return out;
 }
 
+// The scan a sensor_msgs/LaserScan-like message describes, checked: a finite,
+// non-zero angle_increment (a negative one is the same scan listed backwards:
+// returned reversed, with angle_increment > 0), as many ranges as angle_min,
+// angle_max and angle_increment describe beams (within half an increment), and
+// then LaserScan::validate(). Throws std::invalid_argument naming the problem.
+// Ranges are not touched: classifyBeam reads each one.
+LaserScan checkedLaserScan(double angle_min, double angle_max,
+                           double angle_increment, double range_min,
+                           double range_max, std::vector<float> ranges);
+
+template <typename ScanMessage>
+LaserScan checkedLaserScan(const ScanMessage &in) {
+  return checkedLaserScan(in.angle_min, in.angle_max, in.angle_increment,
+                          in.range_min, in.range_max,
+                          std::vector<float>(in.ranges.begin(), in.ranges.end()));
+}
+
 // What one range reading says (REP-117).
 enum class BeamKind {
   kHit,      // a detection at `range`, range_min <= range <= range_max

@@ -207,6 +207,12 @@ std::optional<Eigen::Isometry3d> RecordingMapper::poseOf(const FrameHeader& head
   if (!pose) {
     skip(header, "no transform from '" + header.frame_id + "' to '" + config_.frame_id + "'",
          "at t = " + std::to_string(header.stamp) + " s: " + why);
+    return std::nullopt;
+  }
+  if (!pose->matrix().allFinite()) {  // NaN in a pose file or a recorded transform
+    skip(header, "pose of '" + header.frame_id + "' in '" + config_.frame_id + "' not finite",
+         "at t = " + std::to_string(header.stamp) + " s");
+    return std::nullopt;
   }
   return pose;
 }

@@ -174,6 +174,12 @@ std::vector<float> disparityFromMessage(const stereo_msgs::DisparityImage& messa
 StereoCamera stereoCameraFrom(const stereo_msgs::DisparityImage& message,
                               const sensor_msgs::CameraInfo& left_info) {
   const CameraIntrinsics left = intrinsicsFromCameraInfo(left_info);
+  if (left_info.width != message.image.width || left_info.height != message.image.height) {
+    throw std::invalid_argument(
+        "camera_info is for " + std::to_string(left_info.width) + "x" +
+        std::to_string(left_info.height) + " images, the disparity image is " +
+        std::to_string(message.image.width) + "x" + std::to_string(message.image.height));
+  }
   StereoCamera camera;
   camera.fx = message.f;
   camera.fy = message.f * left.fy / left.fx;

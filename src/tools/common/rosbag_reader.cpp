@@ -339,7 +339,12 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
     if (!scan) return;
     LaserScanFrame frame;
     frame.header = headerOf(message, "laser", scan->header);
-    frame.scan = toLaserScan(*scan);
+    try {
+      frame.scan = checkedLaserScan(*scan);
+    } catch (const std::invalid_argument& error) {
+      consumer->onUnreadable(frame.header, error.what());
+      return;
+    }
     consumer->onLaserScan(frame);
   }
 }
