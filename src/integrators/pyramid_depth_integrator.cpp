@@ -272,7 +272,8 @@ float DepthInverseModel::logOdds(double distance, double measured) const {
 
 DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
                                  double t0, int levels, double max_range,
-                                 PyramidSelection selection)
+                                 PyramidSelection selection,
+                                 const std::function<double(double)>& reach_of_farthest)
     : thresholds_(std::max(levels, 1)),
       scales_(thresholds_.size()),
       inverse_gaps_(thresholds_.size(), 0.0),
@@ -314,7 +315,7 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
   if (selection == PyramidSelection::kMinimum) {
     buildMinimumLayers();
   } else {
-    buildClosestLayers();
+    buildClosestLayers(firstReadLevel(reach_of_farthest));
   }
 }
 
@@ -362,11 +363,27 @@ void DistancePyramid::buildMinimumLayers() {
   }
 }
 
-void DistancePyramid::buildClosestLayers() {
+int DistancePyramid::firstReadLevel(const std::function<double(double)>& reach_of_farthest) const {
+  if (!reach_of_farthest) return 0;
+  const std::vector<float>& distances = layers_[0].cells;
+  float farthest = -kInfinity;
+  for (float value : distances) farthest = value > farthest ? value : farthest;  // NaN drops out
+  if (farthest == -kInfinity) return levels();  // no valid pixel: no layer is read
+  // A voxel is read at its bracketing level i (t_{i+1} < distance <= t_i) and i + 1; no voxel
+  // farther than the reach is informed, so the nearest informed voxels decide (Eq. 12).
+  const double reach = reach_of_farthest(farthest);
+  int level = 0;
+  while (level + 1 < levels() && reach <= threshold(level + 1)) ++level;
+  return level;
+}
+
+void DistancePyramid::buildClosestLayers(int first_read_level) {
   // The fine layers have few pixels per cell: scanning M is cheaper than bucket bookkeeping.
+  // Those finer than any voxel reads stay invalid (at coarse resolutions the 2 x 2 and 4 x 4
+  // layers are read only by voxels tens of metres away).
   const int scanned = std::min(kScannedLevels, levels());
 #pragma omp parallel for schedule(dynamic, 1)
-  for (int level = 1; level < scanned; ++level) {
+  for (int level = std::max(1, first_read_level); level < scanned; ++level) {
     const float target = static_cast<float>(threshold(level));
     fillLayer(
         layers_[0], level, [target](float value) { return std::abs(value - target); },
@@ -529,8 +546,13 @@ DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
   const PyramidSelection selection = config_.method == DepthMethod::kAndert
                                          ? PyramidSelection::kMinimum
                                          : PyramidSelection::kClosestToThreshold;
-  return DepthFrame{camera, T_map_camera, T_map_camera.inverse(), resolution,
-                    DistancePyramid(depth, camera, t0, levels, config_.max_range, selection)};
+  // The farthest voxel any measurement informs (Model::informs grows with the measurement).
+  const auto reach_of_farthest = [this](double farthest) {
+    return farthest + config_.unknown_behind_sigmas * model_.sigmaAt(farthest);
+  };
+  return DepthFrame{
+      camera, T_map_camera, T_map_camera.inverse(), resolution,
+      DistancePyramid(depth, camera, t0, levels, config_.max_range, selection, reach_of_farthest)};
 }
 
 std::optional<float> PyramidDepthIntegrator::voxelLogOdds(

@@ -88,8 +88,12 @@ class DistanceBuckets;
 class DistancePyramid {
  public:
   // t0 = focal length x resolution: at that distance a voxel projects onto one pixel.
+  // reach_of_farthest (optional, kClosestToThreshold only): the farthest voxel distance the
+  // image's farthest measurement informs; scanned layers finer than any such voxel reads are
+  // then left invalid instead of built.
   DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera, double t0,
-                  int levels, double max_range, PyramidSelection selection);
+                  int levels, double max_range, PyramidSelection selection,
+                  const std::function<double(double)>& reach_of_farthest = {});
 
   // Layers needed for voxels down to min_range: until t_i <= min_range or one cell covers the
   // image, at most max_levels.
@@ -117,7 +121,10 @@ class DistancePyramid {
   };
   void sizeLayer(int level);
   void buildMinimumLayers();  // Andert: 2 x 2 minima of the layer below
-  void buildClosestLayers();  // Eq. 10: fine layers scanned, coarse ones from distance buckets
+  // The first layer a voxel can read (see the constructor); 0 without reach_of_farthest.
+  int firstReadLevel(const std::function<double(double)>& reach_of_farthest) const;
+  // Eq. 10: fine layers scanned, coarse ones from distance buckets.
+  void buildClosestLayers(int first_read_level);
   void fillBuckets(int level, DistanceBuckets* buckets) const;
   void takeClosest(const DistanceBuckets& buckets, int level);
   // The first measurement of the cell, in scan order, of least |d - target|.

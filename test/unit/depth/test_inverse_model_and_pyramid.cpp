@@ -149,6 +149,34 @@ TEST(DistancePyramid, Eq10KeepsTheMeasurementClosestToEachLayersDistance) {
   EXPECT_NEAR(minimum.at(2, 0, 0), 1.0f, 1e-5);
 }
 
+TEST(DistancePyramid, LayersFinerThanAnyInformedVoxelReadsAreLeftInvalid) {
+  const std::vector<float> depth = {1.0f, 3.9f,  7.0f,  0.0f,   //
+                                    5.0f, 4.5f,  kNaN,  kNaN,   //
+                                    2.1f, 9.0f,  50.0f, 0.0f,   // 50 m is beyond max_range
+                                    6.0f, 1.85f, kNaN,  0.0f};  //
+  const DepthImageView view{4, 4, depth.data()};
+  double farthest_seen = 0.0;
+  // Reach 9 / 8 m <= t_2 = 2 m: every informed voxel reads layer 2 (and layer 0 beyond t_0),
+  // never layer 1 (t = 4 m), which is left invalid.
+  const DistancePyramid near(view, flatCamera(4, 4), 8.0, 3, 20.0,
+                             PyramidSelection::kClosestToThreshold, [&](double farthest) {
+                               farthest_seen = farthest;
+                               return farthest / 8.0;
+                             });
+  EXPECT_NEAR(farthest_seen, 9.0, 1e-5);  // the farthest valid distance, not the invalid 50 m
+  for (int v = 0; v < 2; ++v) {
+    for (int u = 0; u < 2; ++u) EXPECT_TRUE(std::isnan(near.at(1, u, v))) << u << " " << v;
+  }
+  EXPECT_NEAR(near.at(2, 0, 0), 2.1f, 1e-5);
+  EXPECT_FLOAT_EQ(near.at(0, 1, 0), 3.9f);
+  // Reach 9 / 4 m lies in (t_2, t_1]: such voxels read layers 1 and 2, so layer 1 is built.
+  const DistancePyramid farther(view, flatCamera(4, 4), 8.0, 3, 20.0,
+                                PyramidSelection::kClosestToThreshold,
+                                [](double farthest) { return farthest / 4.0; });
+  EXPECT_NEAR(farther.at(1, 0, 0), 3.9f, 1e-5);
+  EXPECT_NEAR(farther.at(1, 0, 1), 2.1f, 1e-5);
+}
+
 TEST(DistancePyramid, LevelCountStopsAtMinRangeOrOneCell) {
   CameraIntrinsics camera;  // 640 x 480
   // t0 = 40 m, min_range 0.1 m: t_9 = 0.078 m is the first t_i <= 0.1 m, and cells of
