@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
@@ -157,9 +158,11 @@ struct MapRun {
 
 // P(O) of never-observed neighbours in Eq. 1 (--unknown_neighbour_occupancy); the core's default.
 double g_unknown_neighbour_occupancy = VisibilityStereoConfig().unknown_neighbour_occupancy;
+// The named parameter set (--parameter_set), Table I by default.
+StereoParameterSet g_parameter_set = StereoParameterSet::kTableI;
 
 VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
-  VisibilityStereoConfig config;
+  VisibilityStereoConfig config = visibilityStereoConfigFor(g_parameter_set);
   config.unknown_neighbour_occupancy = g_unknown_neighbour_occupancy;
   config.disparity.disparity_sigma_px = sigma_px;
   config.disparity.input_resolution = input;
@@ -230,6 +233,30 @@ MapRun runOctomap(const std::vector<octomap::Pointcloud>& clouds,
   run.memory_bytes = tree->memoryUsage();
   run.points_per_frame = clouds.empty() ? 0 : clouds.front().size();
   return run;
+}
+
+// The floor of any method that walks every voxel of every ray: the voxel traversal alone
+// (RayTraversal from the sensor to each point, nothing else), on one thread, process CPU time.
+struct WalkOnly {
+  double cpu_ms_per_frame = 0.0;
+  double steps_per_frame = 0.0;
+};
+
+WalkOnly timeWalkOnly(const std::vector<octomap::Pointcloud>& clouds,
+                      const std::vector<Eigen::Isometry3d>& poses, double resolution) {
+  std::size_t steps = 0;  // counted by the walk, so the walk cannot be optimised away
+  const double cpu_start = cpuMilliseconds();
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    const Eigen::Vector3d origin = poses[i].translation();
+    for (const octomap::point3d& p : clouds[i]) {
+      RayTraversal ray(origin, Eigen::Vector3d(p.x(), p.y(), p.z()), resolution);
+      for (++steps; ray.beforeEnd(); ++steps) ray.stepTowardsEnd();
+    }
+  }
+  WalkOnly walk;
+  walk.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / clouds.size();
+  walk.steps_per_frame = static_cast<double>(steps) / clouds.size();
+  return walk;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -415,6 +442,7 @@ struct CaseResult {
   std::size_t ours_off_surface = 0, octomap_off_surface = 0;
   MapContents contents;
   std::size_t octomap_nodes = 0, octomap_leaves = 0;
+  WalkOnly walk_only;
 };
 
 CaseResult runCase(const StereoView& view, const StereoView& truth, double resolution,
@@ -472,6 +500,7 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
       result.contents = mapContents(map);
       result.octomap_nodes = plain_tree.size();
       result.octomap_leaves = plain_tree.getNumLeafNodes();
+      result.walk_only = timeWalkOnly(clouds, poses, resolution);
     }
   }
   result.ours.ms_per_frame = medianOf(ours_ms);
@@ -508,12 +537,14 @@ void printCase(const char* prefix, const CaseResult& c) {
       "%smap scene=%s source=%s resolution=%g input=%s blocks=%zu block_bytes=%zu "
       "known_voxels=%zu known_per_block=%.1f occupied_voxels=%zu all_free_blocks=%zu "
       "octomap_nodes=%zu octomap_leaves=%zu block_storage_kb=%.0f block_storage_ratio=%.3f "
-      "voxel_visits_per_frame=%.0f checksum=%016llx\n",
+      "voxel_visits_per_frame=%.0f walk_only_cpu_ms_per_frame=%.2f walk_only_steps_per_frame=%.0f "
+      "checksum=%016llx\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
       sizeof(VoxelBlock), m.known_voxels,
       m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
       m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, block_storage / 1024.0,
       block_storage / c.plain.memory_bytes, c.ours.voxel_visits_per_frame,
+      c.walk_only.cpu_ms_per_frame, c.walk_only.steps_per_frame,
       static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
 }
@@ -657,6 +688,7 @@ int runDisparity(const CommandLine& args) {
   options.jitter_m = args.doubleValue("jitter", 0.0);
   options.jitter_deg = args.doubleValue("jitter_deg", 0.0);
   options.sigma_px = args.doubleValue("sigma", 0.5);
+  g_parameter_set = stereoParameterSetFromString(args.value("parameter_set", "table_i"));
   g_unknown_neighbour_occupancy =
       args.doubleValue("unknown_neighbour_occupancy", g_unknown_neighbour_occupancy);
   options.sgbm.block_size = args.intValue("block_size", 5);
