@@ -238,10 +238,14 @@ const std::vector<Workload>& workloads() {
        runDepthFig5},
       {"depth-accuracy",
        "[--scenes box,spheres] [--methods pyramid,andert,ideal] [--views N] [--resolution R]\n"
-       "      [--k K] [--sigma S] [--max_range M]\n"
+       "      [--k K] [--sigma S] [--sigma_quadratic Q] [--unknown_behind_sigmas U]\n"
+       "      [--max_range M] [--clamp on|off] [--observe_views N] [--score_every N]\n"
+       "      [--region auto|frustum|surface] [--points_csv PREFIX]\n"
        "      Pirker et al. Sec. 5.1: N of the 181 sweep views of BOX / SPHERES; surface points\n"
        "      within one voxel of the p = 0.5 iso-surface, observed free voxels labelled free",
-       {"scenes", "methods", "views", "resolution", "k", "sigma", "max_range"},
+       {"scenes", "methods", "views", "resolution", "k", "sigma", "sigma_quadratic",
+        "unknown_behind_sigmas", "max_range", "clamp", "observe_views", "score_every",
+        "points_csv", "region"},
        runDepthAccuracy},
       {"laser",
        "<CARMEN log, .gz accepted> [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"
