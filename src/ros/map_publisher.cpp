@@ -25,6 +25,23 @@ double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+// Times one call into the shared map for MapLockStatistics (no statistics: times nothing).
+class MapCallTimer {
+ public:
+  MapCallTimer(MapLockStatistics* statistics, const char* what)
+      : statistics_(statistics), what_(what), start_(Clock::now()) {}
+  ~MapCallTimer() {
+    if (statistics_ != nullptr) statistics_->recordHold(what_, millisecondsSince(start_));
+  }
+  MapCallTimer(const MapCallTimer&) = delete;
+  MapCallTimer& operator=(const MapCallTimer&) = delete;
+
+ private:
+  MapLockStatistics* statistics_;
+  const char* what_;
+  Clock::time_point start_;
+};
+
 // Rainbow from blue (low) to red (high) over the height range of the occupied voxels, so floors,
 // furniture and ceilings read apart (octomap_server colours by height the same way).
 std_msgs::ColorRGBA heightColor(double normalized_height) {
@@ -59,6 +76,33 @@ std_msgs::ColorRGBA heightColor(double normalized_height) {
 }
 
 }  // namespace
+
+void MapLockStatistics::recordHold(const char* what, double milliseconds) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (milliseconds <= longest_hold_ms_) return;
+  longest_hold_ms_ = milliseconds;
+  longest_hold_call_ = what;
+}
+
+void MapLockStatistics::recordReadWait(double milliseconds) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  longest_read_wait_ms_ = std::max(longest_read_wait_ms_, milliseconds);
+}
+
+double MapLockStatistics::longestHoldMs() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return longest_hold_ms_;
+}
+
+std::string MapLockStatistics::longestHoldCall() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return longest_hold_call_;
+}
+
+double MapLockStatistics::longestReadWaitMs() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return longest_read_wait_ms_;
+}
 
 void MapPublisherConfig::validate() const {
   if (!(publish_rate > 0.0) || !std::isfinite(publish_rate)) {
@@ -122,6 +166,12 @@ bool MapPublisher::needsSending(const ros::Publisher& publisher, const SentVersi
 
 void MapPublisher::publishCycle() {
   const ros::Time stamp = ros::Time::now();
+  {
+    // A trivial read waits exactly as long as a mapper's write still holds the lock.
+    const auto start = Clock::now();
+    map_->voxels().version();
+    lock_statistics_.recordReadWait(millisecondsSince(start));
+  }
   PublishTimings& t = timings_;
   const std::uint64_t cycles = t.cycles + 1;
   t = PublishTimings();
@@ -145,7 +195,11 @@ void MapPublisher::publishCycle() {
 
 void MapPublisher::refreshCache() {
   const auto start = Clock::now();
-  const OccupiedVoxelCache::RefreshStats stats = cache_.refresh(map_->voxels());
+  OccupiedVoxelCache::RefreshStats stats;
+  {
+    const MapCallTimer timer(&lock_statistics_, "occupied-voxel cache refresh");
+    stats = cache_.refresh(map_->voxels());
+  }
   timings_.cache_ms = millisecondsSince(start);
   timings_.cache_blocks_refreshed = stats.blocks_refreshed;
   timings_.cache_full_rebuild = stats.full_rebuild;
@@ -154,7 +208,11 @@ void MapPublisher::refreshCache() {
 void MapPublisher::publishGrid(const ros::Time& stamp) {
   const auto start = Clock::now();
   const SentVersion version = currentVersion();  // read before: later writes are sent next time
-  const OccupancyRaster raster = grid_view_.update(map_->voxels(), &map_->layer());
+  OccupancyRaster raster;
+  {
+    const MapCallTimer timer(&lock_statistics_, "projected_map update");
+    raster = grid_view_.update(map_->voxels(), &map_->layer());
+  }
   auto grid = boost::make_shared<nav_msgs::OccupancyGrid>();
   toOccupancyGridMessage(raster, map_->frameId(), stamp, grid.get());
   grid_publisher_.publish(grid);
@@ -224,7 +282,11 @@ void MapPublisher::publishBinary(const ros::Time& stamp) {
   // The message holds the whole tree, so this cost necessarily follows the map's size.
   const auto start = Clock::now();
   const SentVersion version = currentVersion();
-  const std::unique_ptr<octomap::OcTree> tree = toOcTree(map_->voxels());
+  std::unique_ptr<octomap::OcTree> tree;
+  {
+    const MapCallTimer timer(&lock_statistics_, "octomap_binary conversion");
+    tree = toOcTree(map_->voxels());
+  }
   std::stringstream stream;
   tree->writeBinaryData(stream);
   const std::string bytes = stream.str();
@@ -259,11 +321,17 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
   status.add("memory bytes", voxels.memoryBytes());
   status.add("evicted blocks", voxels.evictedBlockCount());
   status.add("layer cells", map_->layer().knownCellCount());
+  status.add("longest lock hold (ms)", lock_statistics_.longestHoldMs());
+  status.add("longest lock hold (call)", lock_statistics_.longestHoldCall());
+  status.add("longest wait for a read (ms)", lock_statistics_.longestReadWaitMs());
 }
 
 bool MapPublisher::onReset(std_srvs::Empty::Request& /*request*/,
                            std_srvs::Empty::Response& /*response*/) {
-  map_->reset();
+  {
+    const MapCallTimer timer(&lock_statistics_, "~reset");
+    map_->reset();
+  }
   ROS_INFO("%s: map '%s' reset", name_.c_str(), map_->name().c_str());
   return true;
 }
@@ -272,9 +340,16 @@ bool MapPublisher::onClearBox(BoundingBoxQuery::Request& request,
                               BoundingBoxQuery::Response& /*response*/) {
   const Eigen::Vector3d min(request.min.x, request.min.y, request.min.z);
   const Eigen::Vector3d max(request.max.x, request.max.y, request.max.z);
-  const std::size_t voxels = map_->voxels().clearBox(min, max);
-  // The 2D layer has no height: its cells under the box's footprint are cleared too.
-  const std::size_t cells = map_->layer().clearBox(min.head<2>(), max.head<2>());
+  std::size_t voxels = 0, cells = 0;
+  {
+    const MapCallTimer timer(&lock_statistics_, "~clear_bbx (voxels)");
+    voxels = map_->voxels().clearBox(min, max);
+  }
+  {
+    // The 2D layer has no height: its cells under the box's footprint are cleared too.
+    const MapCallTimer timer(&lock_statistics_, "~clear_bbx (layer)");
+    cells = map_->layer().clearBox(min.head<2>(), max.head<2>());
+  }
   ROS_INFO("%s: cleared %zu voxels and %zu layer cells in [%.2f %.2f %.2f] - [%.2f %.2f %.2f]",
            name_.c_str(), voxels, cells, min.x(), min.y(), min.z(), max.x(), max.y(), max.z());
   return true;
@@ -283,7 +358,7 @@ bool MapPublisher::onClearBox(BoundingBoxQuery::Request& request,
 bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& response) {
   const std::string prefix = request.prefix.empty() ? config_.save_prefix : request.prefix;
   try {
-    saveMapFiles(*map_, config_.grid, prefix, &response.files);
+    saveMapFiles(*map_, config_.grid, prefix, &response.files, &lock_statistics_);
     response.success = true;
     response.message = "saved map '" + map_->name() + "' as " + prefix + ".{ot,bt,pgm,yaml}";
     ROS_INFO("%s: %s", name_.c_str(), response.message.c_str());
@@ -296,13 +371,21 @@ bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
 }
 
 void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
-                  std::vector<std::string>* written) {
+                  std::vector<std::string>* written, MapLockStatistics* lock_statistics) {
   // One read of the voxels for both OctoMap files, and the 2D grid, before any file is touched:
   // a map that cannot be saved (empty) leaves the previous files of this prefix as they were.
   std::size_t skipped_voxels = 0;
-  const std::unique_ptr<octomap::OcTree> tree = toOcTree(map.voxels(), &skipped_voxels);
+  std::unique_ptr<octomap::OcTree> tree;
+  {
+    const MapCallTimer timer(lock_statistics, "~save_map octree conversion");
+    tree = toOcTree(map.voxels(), &skipped_voxels);
+  }
   FusedGridView view(grid);
-  const OccupancyRaster raster = view.update(map.voxels(), &map.layer());
+  OccupancyRaster raster;
+  {
+    const MapCallTimer timer(lock_statistics, "~save_map 2D view");
+    raster = view.update(map.voxels(), &map.layer());
+  }
   if (raster.empty()) {
     throw std::runtime_error("map '" + map.name() +
                              "' has no known voxel in the height band and no 2D cell: nothing "

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -39,8 +40,10 @@ MapPublisherConfig readMapPublisherConfig(const ParameterSource& source);
 // its previous version or the complete new one. Safe while mappers write (reads take the map's
 // shared lock). Throws std::runtime_error naming the path, or naming the reason when nothing could
 // be written (an empty map); the files completed before a failure are appended to *written.
+// `lock_statistics`, if given, records how long each read of the map took.
+class MapLockStatistics;
 void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
-                  std::vector<std::string>* written);
+                  std::vector<std::string>* written, MapLockStatistics* lock_statistics = nullptr);
 
 // Wall time (ms) of the parts of the last publishing cycle, and what they handled. Outputs
 // without subscribers, or unchanged since they were last sent, cost nothing and report 0.
@@ -58,6 +61,29 @@ struct PublishTimings {
   std::size_t map_blocks = 0;             // allocated in the map
 };
 
+// How long the MapPublisher keeps the shared map locked, measured from the outside: every call
+// into the VoxelMap or GridLayer2D takes the map's lock (shared for reads, exclusive for clear and
+// reset) and holds it at most for the call's duration, so the longest call bounds how long the
+// publisher or one of its services can keep a mapper from integrating. Thread-safe: the timer and
+// the services may run on different threads.
+class MapLockStatistics {
+ public:
+  // One call into the map that took `milliseconds`; `what` names it (a string literal).
+  void recordHold(const char* what, double milliseconds);
+  // How long a trivial read (map version) waited: the time a mapper's write still held the lock.
+  void recordReadWait(double milliseconds);
+
+  double longestHoldMs() const;
+  std::string longestHoldCall() const;
+  double longestReadWaitMs() const;
+
+ private:
+  mutable std::mutex mutex_;
+  double longest_hold_ms_ = 0.0;
+  const char* longest_hold_call_ = "none";
+  double longest_read_wait_ms_ = 0.0;
+};
+
 class MapPublisher {
  public:
   // Topics on node_handle, services and diagnostics under private_node_handle. `name` labels log
@@ -67,6 +93,7 @@ class MapPublisher {
                const MapPublisherConfig& config);
 
   const PublishTimings& lastTimings() const { return timings_; }
+  const MapLockStatistics& lockStatistics() const { return lock_statistics_; }
 
  private:
   // Versions of the map and layer an output was built from, so unchanged outputs are not resent.
@@ -100,6 +127,7 @@ class MapPublisher {
   OccupiedVoxelCache cache_;
   FusedGridView grid_view_;
   PublishTimings timings_;
+  MapLockStatistics lock_statistics_;
 
   SentVersion grid_sent_, markers_sent_, cloud_sent_, binary_sent_;
   ros::Publisher grid_publisher_, markers_publisher_, cloud_publisher_, binary_publisher_;
