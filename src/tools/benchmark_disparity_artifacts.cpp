@@ -342,7 +342,11 @@ void runArtifacts(const CommandLine& args, const VisibilityStereoConfig& visibil
     }
     cv::Mat stacked;
     cv::vconcat(panels, stacked);
-    writeImage(args.value("images") + "/disparity_artifacts_top.png", stacked);
+    // Table I's picture keeps its name; another parameter set's name is appended.
+    const std::string set = args.value("parameter_set", "table_i");
+    writeImage(args.value("images") + "/disparity_artifacts_top" +
+                   (set == "table_i" ? std::string() : "_" + set) + ".png",
+               stacked);
   }
 }
 
