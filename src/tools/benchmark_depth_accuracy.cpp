@@ -229,9 +229,20 @@ void integrateShell(const PyramidDepthIntegrator& integrator, const View& view,
                     VoxelMap* map) {
   const DepthFrame frame =
       integrator.prepare(view.posed().depth, camera, view.T_world_camera, map->resolution());
+  // integrate() evaluates only the frame's candidate blocks; outside them no voxel changes
+  // (and the ideal model would scan the whole image for voxels behind the camera).
+  std::vector<BlockIndex> candidates = integrator.candidateBlocks(frame);
+  const auto less = [](const BlockIndex& a, const BlockIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(candidates.begin(), candidates.end(), less);
   std::vector<float> deltas(shell.size(), std::numeric_limits<float>::quiet_NaN());
 #pragma omp parallel for schedule(dynamic, 256)
   for (long i = 0; i < static_cast<long>(shell.size()); ++i) {
+    if (!std::binary_search(candidates.begin(), candidates.end(), VoxelMap::blockOf(shell[i]),
+                            less)) {
+      continue;
+    }
     if (const std::optional<float> delta =
             integrator.voxelLogOdds(frame, map->centerOf(shell[i]))) {
       deltas[i] = *delta;
