@@ -154,6 +154,8 @@ void writePointsCsv(const std::string& path, const sim::Scene& scene, const Voxe
 #pragma omp parallel for schedule(dynamic, 256)
     for (long i = 0; i < static_cast<long>(n); ++i) {
       const Eigen::Vector3d& p = points[i];
+      // Points behind the camera get nothing (and the ideal would scan the whole image).
+      if ((frame.T_camera_map * p).z() <= 0.0) continue;
       if (const std::optional<float> delta =
               integrator.voxelLogOdds(frame, map.centerOf(map.indexOf(p)))) {
         sum[i] += *delta;
