@@ -16,6 +16,9 @@ rm -rf "$build/test_results"
 set +e
 (cd "$build" && ctest --output-on-failure -j"${JOBS:-$(nproc)}")
 ctest_status=$?
+# libFuzzer harnesses (clang, ASan + UBSan), FUZZ_SECONDS (default 10) each; JUnit XML beside the
+# tests' (counted below).
+"$root/scripts/fuzz.sh" "${FUZZ_SECONDS:-10}"
 # Every test executable and rostest leaves JUnit XML here (a crashed one a MISSING-*.xml).
 /usr/bin/python3 "$root/scripts/count_test_results.py" "$build/test_results" > "$build/test_counts.txt"
 count_status=$?

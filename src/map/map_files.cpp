@@ -126,9 +126,13 @@ std::unique_ptr<VoxelMap> readOctomapFile(const std::string& path, const VoxelMa
   std::unique_ptr<octomap::OcTree> tree = readOcTreeFile(path, base.model);
   VoxelMapConfig config = base;
   config.resolution = tree->getResolution();
-  auto map = std::make_unique<VoxelMap>(config);
-  fromOcTree(*tree, map.get());
-  return map;
+  try {
+    auto map = std::make_unique<VoxelMap>(config);
+    fromOcTree(*tree, map.get());
+    return map;
+  } catch (const std::invalid_argument& error) {  // e.g. leaves covering too many voxels
+    throw std::runtime_error(path + ": " + error.what());
+  }
 }
 
 void writeMapServerFiles(const OccupancyRaster& raster, const std::string& prefix) {

@@ -1,8 +1,13 @@
 #include "occupancy_fusion/map/octomap_conversion.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
+#include <streambuf>
 #include <vector>
 
 #include "occupancy_fusion/map/spatial_key.h"
@@ -27,6 +32,188 @@ VoxelIndex indexOfKey(const octomap::OcTreeKey& key) {
 struct BlockWrites {
   std::vector<std::pair<int, float>> values;  // (linear index in block, log-odds)
 };
+
+// OcTree nodes sit at depths 0 (the root) to 16 (voxels); liboctomap's readers would follow a
+// file's child bits to any depth.
+constexpr unsigned kOcTreeDepth = 16;
+
+// The text header of .bt and .ot files, read as liboctomap's AbstractOcTree::readHeader does:
+// white-space separated keywords "id", "size", "res", "#" comment lines, unknown keywords
+// skipped to the end of their line, and "data" ending the header at the end of its line.
+struct OctomapHeader {
+  bool binary = false;
+  std::string id;
+  std::size_t declared_nodes = 0;
+  double resolution = 0.0;
+  std::size_t data_offset = 0;  // first byte of the node data
+};
+
+// A read-only stream buffer over bytes held elsewhere (no copy of a large map file).
+class MemoryBuffer : public std::streambuf {
+ public:
+  MemoryBuffer(const char* begin, const char* end) {
+    char* first = const_cast<char*>(begin);  // never written: the buffer is only read
+    setg(first, first, first + (end - begin));
+  }
+};
+
+class HeaderCursor {
+ public:
+  explicit HeaderCursor(const std::string& bytes, std::size_t at) : bytes_(bytes), at_(at) {}
+  std::string token() {
+    while (at_ < bytes_.size() && std::isspace(static_cast<unsigned char>(bytes_[at_]))) ++at_;
+    const std::size_t begin = at_;
+    while (at_ < bytes_.size() && !std::isspace(static_cast<unsigned char>(bytes_[at_]))) ++at_;
+    return bytes_.substr(begin, at_ - begin);
+  }
+  void skipLine() {
+    const std::size_t end = bytes_.find('\n', at_);
+    at_ = end == std::string::npos ? bytes_.size() : end + 1;
+  }
+  std::size_t position() const { return at_; }
+
+ private:
+  const std::string& bytes_;
+  std::size_t at_;
+};
+
+double headerNumber(const std::string& token, const char* key) {
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (token.empty() || end != token.c_str() + token.size()) {
+    throw std::runtime_error(std::string("header: bad ") + key + " '" + token.substr(0, 20) + "'");
+  }
+  return value;
+}
+
+OctomapHeader parseOctomapHeader(const std::string& bytes) {
+  OctomapHeader header;
+  const std::string first_line = bytes.substr(0, bytes.find('\n'));
+  if (startsWith(first_line, kBinaryHeader)) {
+    header.binary = true;
+  } else if (!startsWith(first_line, kFullHeader)) {
+    throw std::runtime_error("not an octomap .bt or .ot file (first line \"" +
+                             first_line.substr(0, 40) + "\")");
+  }
+  HeaderCursor cursor(bytes, 0);
+  cursor.skipLine();
+  bool has_size = false;
+  while (true) {
+    const std::string token = cursor.token();
+    if (token.empty()) throw std::runtime_error("header: no \"data\" line");
+    if (token == "data") {
+      cursor.skipLine();
+      break;
+    }
+    if (token == "id") {
+      header.id = cursor.token();
+    } else if (token == "res") {
+      header.resolution = headerNumber(cursor.token(), "res");
+    } else if (token == "size") {
+      const double size = headerNumber(cursor.token(), "size");
+      if (!(size >= 0.0 && size <= 4294967295.0 && size == std::floor(size))) {
+        throw std::runtime_error("header: bad size " + std::to_string(size));
+      }
+      header.declared_nodes = static_cast<std::size_t>(size);
+      has_size = true;
+    } else {
+      cursor.skipLine();  // a comment or an unknown keyword
+    }
+  }
+  // liboctomap renames the binary format's deprecated id "1".
+  if (header.id != "OcTree" && !(header.binary && header.id == "1")) {
+    throw std::runtime_error("holds a '" + header.id.substr(0, 40) + "', not an OcTree");
+  }
+  if (!(std::isfinite(header.resolution) && header.resolution > 0.0)) {
+    throw std::runtime_error("header: resolution must be positive, got " +
+                             std::to_string(header.resolution));
+  }
+  if (!has_size) throw std::runtime_error("header: no size");
+  header.data_offset = cursor.position();
+  return header;
+}
+
+// Walks the node data as liboctomap's readers do (.ot: per node its float log-odds and a byte of
+// child flags, depth first; .bt: per node two bytes of 2-bit child codes, 01 free leaf, 10
+// occupied leaf, 11 inner node read next), counting nodes. Throws std::runtime_error unless the
+// data holds exactly the nodes the header declares, none below voxel depth and (.ot) every
+// log-odds finite: liboctomap itself would return part of the tree from a truncated file, and
+// follow garbage flags read past its end.
+class NodeDataCheck {
+ public:
+  NodeDataCheck(const std::string& bytes, std::size_t offset) : bytes_(bytes), at_(offset) {}
+
+  std::size_t countFullNodes(unsigned depth) {
+    float log_odds;
+    std::memcpy(&log_odds, take(sizeof(log_odds)), sizeof(log_odds));
+    if (!std::isfinite(log_odds))
+      throw std::runtime_error("node " + std::to_string(nodes_) + " has a non-finite log-odds");
+    const auto children = static_cast<unsigned char>(*take(1));
+    ++nodes_;
+    std::size_t count = 1;
+    if (children != 0) requireChildDepth(depth + 1);
+    for (int i = 0; i < 8; ++i) {
+      if (children & (1u << i)) count += countFullNodes(depth + 1);
+    }
+    return count;
+  }
+
+  // The node at `depth` exists; counts its children and their subtrees.
+  std::size_t countBinaryChildren(unsigned depth) {
+    const char* codes = take(2);
+    std::size_t count = 0;
+    unsigned inner = 0;  // bit i: child i is an inner node, read after the two bytes
+    for (int i = 0; i < 8; ++i) {
+      const unsigned code = (static_cast<unsigned char>(codes[i / 4]) >> (2 * (i % 4))) & 3u;
+      if (code == 0) continue;
+      requireChildDepth(depth + 1);
+      ++count;
+      if (code == 3) inner |= 1u << i;
+    }
+    // liboctomap would turn a childless inner node into a leaf of log-odds -FLT_MAX.
+    if (depth > 0 && count == 0) throw std::runtime_error("an inner node without children");
+    nodes_ += count;
+    for (int i = 0; i < 8; ++i) {
+      if (inner & (1u << i)) {
+        requireChildDepth(depth + 2);  // an inner node has children of its own
+        count += countBinaryChildren(depth + 1);
+      }
+    }
+    return count;
+  }
+
+ private:
+  const char* take(std::size_t count) {
+    if (bytes_.size() - at_ < count) {
+      throw std::runtime_error("the data ends after " + std::to_string(nodes_) +
+                               " nodes (a truncated file)");
+    }
+    const char* here = bytes_.data() + at_;
+    at_ += count;
+    return here;
+  }
+  void requireChildDepth(unsigned depth) const {
+    if (depth > kOcTreeDepth) {
+      throw std::runtime_error("node " + std::to_string(nodes_) + " has children below depth " +
+                               std::to_string(kOcTreeDepth));
+    }
+  }
+
+  const std::string& bytes_;
+  std::size_t at_;
+  std::size_t nodes_ = 0;
+};
+
+void requireCompleteData(const OctomapHeader& header, const std::string& bytes) {
+  if (header.declared_nodes == 0) return;  // liboctomap reads no data for an empty tree
+  NodeDataCheck check(bytes, header.data_offset);
+  const std::size_t found =
+      header.binary ? 1 + check.countBinaryChildren(0) : check.countFullNodes(0);
+  if (found != header.declared_nodes) {
+    throw std::runtime_error("the header declares " + std::to_string(header.declared_nodes) +
+                             " nodes, the data holds " + std::to_string(found));
+  }
+}
 
 }  // namespace
 
@@ -63,7 +250,7 @@ std::unique_ptr<octomap::OcTree> toOcTree(const VoxelMap& map, std::size_t* skip
   return tree;
 }
 
-void fromOcTree(const octomap::OcTree& tree, VoxelMap* map) {
+void fromOcTree(const octomap::OcTree& tree, VoxelMap* map, std::size_t max_voxels) {
   const double resolution = map->resolution();
   if (std::abs(tree.getResolution() - resolution) > 1e-9 * resolution) {
     throw std::invalid_argument(
@@ -71,6 +258,17 @@ void fromOcTree(const octomap::OcTree& tree, VoxelMap* map) {
         " m) differs from the map's (" + std::to_string(resolution) + " m)");
   }
   const int max_depth = static_cast<int>(tree.getTreeDepth());
+  // A pruned leaf at depth d stands for 8^(16 - d) voxels: count before expanding, so that a
+  // small file cannot ask for the whole key space (a root leaf is 2^48 voxels).
+  double voxels = 0.0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    voxels += std::pow(8.0, max_depth - static_cast<int>(it.getDepth()));
+  }
+  if (voxels > static_cast<double>(max_voxels)) {
+    throw std::invalid_argument("fromOcTree: the tree's leaves cover " + std::to_string(voxels) +
+                                " voxels, more than the " + std::to_string(max_voxels) +
+                                " allowed");
+  }
   SpatialKeyMap<BlockWrites> writes;  // keyed by packKey(block)
   std::vector<BlockIndex> blocks;
   auto add_voxel = [&](const VoxelIndex& index, float log_odds) {
@@ -102,35 +300,44 @@ void fromOcTree(const octomap::OcTree& tree, VoxelMap* map) {
   });
 }
 
+std::unique_ptr<octomap::OcTree> parseOcTree(const std::string& bytes, const std::string& name,
+                                             const OccupancyModel& model) {
+  OctomapHeader header;
+  try {
+    header = parseOctomapHeader(bytes);
+    requireCompleteData(header, bytes);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(name + ": " + error.what());
+  }
+  auto tree = std::make_unique<octomap::OcTree>(header.resolution);
+  // Binary leaves are read as the clamping bounds: set them before reading.
+  applyModel(model, tree.get());
+  if (header.declared_nodes > 0) {
+    // The data was checked above: liboctomap reads exactly the nodes counted there.
+    MemoryBuffer buffer(bytes.data() + header.data_offset, bytes.data() + bytes.size());
+    std::istream data(&buffer);
+    if (header.binary) {
+      tree->readBinaryData(data);
+    } else {
+      tree->readData(data);
+    }
+  }
+  if (tree->size() != header.declared_nodes) {  // a check of the check above
+    throw std::runtime_error(name + ": liboctomap read " + std::to_string(tree->size()) +
+                             " nodes, the header declares " +
+                             std::to_string(header.declared_nodes));
+  }
+  return tree;
+}
+
 std::unique_ptr<octomap::OcTree> readOcTreeFile(const std::string& path,
                                                 const OccupancyModel& model) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open octomap file " + path);
-  std::string first_line;
-  std::getline(in, first_line);
-  in.seekg(0);
-  std::unique_ptr<octomap::OcTree> tree;
-  if (startsWith(first_line, kBinaryHeader)) {
-    tree = std::make_unique<octomap::OcTree>(0.1);  // readBinary takes the file's resolution
-    // Binary leaves are read as the clamping bounds: set them before reading.
-    applyModel(model, tree.get());
-    if (!tree->readBinary(in)) throw std::runtime_error("cannot parse binary octomap file " + path);
-  } else if (startsWith(first_line, kFullHeader)) {
-    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
-    if (!read) throw std::runtime_error("cannot parse octomap file " + path);
-    auto* as_octree = dynamic_cast<octomap::OcTree*>(read.get());
-    if (as_octree == nullptr) {
-      throw std::runtime_error("octomap file " + path + " holds a " + read->getTreeType() +
-                               ", not an OcTree");
-    }
-    read.release();
-    tree.reset(as_octree);
-    applyModel(model, tree.get());
-  } else {
-    throw std::runtime_error("not an octomap .bt or .ot file (first line \"" +
-                             first_line.substr(0, 40) + "\"): " + path);
-  }
-  return tree;
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (!in) throw std::runtime_error("cannot read octomap file " + path);
+  return parseOcTree(bytes.str(), path, model);
 }
 
 }  // namespace occupancy_fusion

@@ -30,6 +30,9 @@ DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>
     throw DepthImageRejected(DepthImageRejected::Reason::kEncoding,
                              "encoding '" + image.encoding + "' with foreign byte order");
   }
+  if (image.width == 0 || image.height == 0) {
+    throw DepthImageRejected(DepthImageRejected::Reason::kEncoding, "the image is empty");
+  }
   const std::size_t pixel_bytes = millimetres ? 2 : 4;
   if (image.step < image.width * pixel_bytes ||
       image.data.size() < static_cast<std::size_t>(image.step) * image.height) {

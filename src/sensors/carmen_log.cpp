@@ -96,10 +96,13 @@ parseCarmenFlaserLine(const std::string &line, const CarmenReadConfig &config) {
   out.scan.angle_increment = beamSpacing(beams);
   out.scan.range_min = config.range_min;
   out.scan.range_max = config.range_max;
-  out.scan.ranges.resize(static_cast<std::size_t>(beams));
-  for (float &range : out.scan.ranges) {
+  // Grown as ranges are read: a corrupt count (say 2000000000) must not
+  // allocate gigabytes before the line runs out of numbers.
+  for (int beam = 0; beam < beams; ++beam) {
+    float range = 0.0f;
     if (!(in >> range))
       throw std::runtime_error("FLASER: fewer ranges than its beam count");
+    out.scan.ranges.push_back(range);
   }
   if (!(in >> out.x >> out.y >> out.theta >> out.odom_x >> out.odom_y >>
         out.odom_theta)) {

@@ -96,8 +96,15 @@ StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCame
         ++result.dropped_uncertain;
         continue;
       }
-      result.points.emplace_back(static_cast<float>(z * (u - camera.cx) / camera.fx),
-                                 static_cast<float>(z * ray_y), static_cast<float>(z));
+      const Eigen::Vector3f point(static_cast<float>(z * (u - camera.cx) / camera.fx),
+                                  static_cast<float>(z * ray_y), static_cast<float>(z));
+      // A disparity near 0 or an absurd focal length or baseline can put the point beyond float
+      // range or round its depth to 0: the ray caster could not walk to it.
+      if (!point.allFinite() || !(point.z() > 0.0f) ||
+          !std::isfinite(static_cast<float>(sigma_z))) {
+        continue;
+      }
+      result.points.push_back(point);
       result.depth_sigmas.push_back(static_cast<float>(sigma_z));
     }
   }

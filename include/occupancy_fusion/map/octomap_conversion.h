@@ -26,17 +26,27 @@ std::unique_ptr<octomap::OcTree> toOcTree(const VoxelMap& map,
 
 // Writes every leaf of the tree into the map (setLogOdds semantics: values as stored, existing
 // voxels overwritten, others untouched). A leaf above full depth (a pruned subtree) expands to
-// all voxels it covers. Throws std::invalid_argument if the resolutions differ.
-void fromOcTree(const octomap::OcTree& tree, VoxelMap* map);
+// all voxels it covers. Throws std::invalid_argument, leaving the map untouched, if the
+// resolutions differ or the leaves cover more than max_voxels voxels (the default, 2^28, about
+// 3 GiB while importing, refuses absurd files: one root leaf covers 2^48 voxels).
+constexpr std::size_t kMaxImportedVoxels = std::size_t{1} << 28;
+void fromOcTree(const octomap::OcTree& tree, VoxelMap* map,
+                std::size_t max_voxels = kMaxImportedVoxels);
 
 // Sets the tree's hit/miss/clamping/occupancy parameters from the model.
 void applyModel(const OccupancyModel& model, octomap::OcTree* tree);
 
 // Reads a .bt (binary: labels only; liboctomap sets occupied leaves to the clamping maximum and
 // free ones to the minimum, here those of `model`) or .ot (full log-odds) file; the tree gets the
-// model's parameters. The kind is taken from the file's first line, not its name. Throws
-// std::runtime_error naming the path on failure, or if an .ot file holds another tree type.
+// model's parameters. The kind is taken from the file's first line, not its name. The node data
+// is checked before liboctomap reads it: it must hold exactly the number of nodes the header
+// declares (liboctomap alone returns part of the tree from a truncated file), none below voxel
+// depth, and (.ot) finite log-odds. Throws std::runtime_error naming the path and what is wrong,
+// also if the file holds another tree type.
 std::unique_ptr<octomap::OcTree> readOcTreeFile(const std::string& path,
                                                 const OccupancyModel& model = OccupancyModel());
+// The same for the file's bytes; `name` goes into the messages.
+std::unique_ptr<octomap::OcTree> parseOcTree(const std::string& bytes, const std::string& name,
+                                             const OccupancyModel& model = OccupancyModel());
 
 }  // namespace occupancy_fusion

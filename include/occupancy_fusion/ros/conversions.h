@@ -15,7 +15,8 @@ namespace occupancy_fusion {
 
 // Every point of the cloud (x, y, z of type FLOAT32 or FLOAT64), mapped by target_T_cloud.
 // Non-finite points are kept: the integrators skip and count them. Throws std::invalid_argument
-// naming the cloud's frame when x, y or z is missing or of another type.
+// naming the cloud's frame when x, y or z is missing or of another type, or when the width x
+// height points (point_step, row_step; rows may be padded) do not fit in the data.
 std::vector<Eigen::Vector3f> transformedPoints(const sensor_msgs::PointCloud2& cloud,
                                                const Eigen::Isometry3d& target_T_cloud);
 

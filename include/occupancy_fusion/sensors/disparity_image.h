@@ -94,7 +94,8 @@ struct StereoPoints {
 
 // Converts the valid pixels (finite d > max(0, min_disparity_px)) whose sigma_z / z is within
 // max_depth_sigma_ratio at the configured input resolution: pixel (u, v) with depth z gives z * ((u
-// - cx) / fx, (v - cy) / fy, 1).
+// - cx) / fx, (v - cy) / fy, 1); points beyond float range or with a
+// depth that rounds to 0 are skipped.
 StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCamera& camera,
                                const DisparityConversionConfig& config);
 
