@@ -202,13 +202,16 @@ TEST_F(MapPersistence, DamagedFilesAreRejectedNamingTheFile) {
   // Cut in the middle of the tree data, as a copy interrupted or a disk full while copying would.
   { std::ofstream(path("truncated.ot"), std::ios::binary) << bytes.substr(0, bytes.size() / 2); }
   { std::ofstream(path("empty.ot"), std::ios::binary); }
-  // readOcTreeFile accepts the truncated file (liboctomap reads part of the tree without an
-  // error); the MapServer's load_map compares the header's node count (map_persistence rostest).
-  // The tree read is smaller than the file declares:
-  const std::unique_ptr<octomap::OcTree> partial =
-      readOcTreeFile(path("truncated.ot"), saved.model());
-  EXPECT_LT(partial->size(), readOcTreeFile(path("saved.ot"), saved.model())->size());
-  for (const char* name : {"empty.ot", "absent.ot"}) {
+  // liboctomap alone would return part of the tree from the truncated file: readOcTreeFile checks
+  // the node data against the header's node count first.
+  try {
+    readOcTreeFile(path("truncated.ot"), saved.model());
+    ADD_FAILURE() << "the truncated file was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("truncated"), std::string::npos) << error.what();
+  }
+  EXPECT_EQ(readOcTreeFile(path("saved.ot"), saved.model())->size(), toOcTree(saved)->size());
+  for (const char* name : {"truncated.ot", "empty.ot", "absent.ot"}) {
     try {
       readOcTreeFile(path(name), saved.model());
       ADD_FAILURE() << name << " was accepted";
@@ -216,6 +219,26 @@ TEST_F(MapPersistence, DamagedFilesAreRejectedNamingTheFile) {
       EXPECT_NE(std::string(error.what()).find(path(name)), std::string::npos) << error.what();
     }
   }
+  // A header whose node count differs from the data, and one leaf (the root) that would cover
+  // 2^48 voxels: both refused, naming the file.
+  const std::string header = "# Octomap OcTree file\nid OcTree\nsize 2\nres 0.05\ndata\n";
+  const float log_odds = 1.5f;
+  const std::string root_leaf =
+      std::string(reinterpret_cast<const char*>(&log_odds), sizeof(log_odds)) + '\0';
+  { std::ofstream(path("miscounted.ot"), std::ios::binary) << header << root_leaf; }
+  std::string one_node = header;
+  one_node.replace(one_node.find("size 2"), 6, "size 1");
+  { std::ofstream(path("root_leaf.ot"), std::ios::binary) << one_node << root_leaf; }
+  for (const char* name : {"miscounted.ot", "root_leaf.ot"}) {
+    try {
+      readOctomapFile(path(name), mapConfig());
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const std::runtime_error& error) {
+      EXPECT_NE(std::string(error.what()).find(path(name)), std::string::npos) << error.what();
+    }
+  }
+  EXPECT_EQ(readOcTreeFile(path("root_leaf.ot"), saved.model())->size(), 1u);
+
   // A file of another resolution does not go into a live map of this one.
   VoxelMapConfig coarse = mapConfig();
   coarse.resolution = 0.1;
