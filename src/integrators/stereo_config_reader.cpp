@@ -56,6 +56,7 @@ VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source)
   read(source, "unknown_neighbour_occupancy", &config.unknown_neighbour_occupancy);
   read(source, "inside_stop_probability", &config.inside_stop_probability);
   read(source, "max_range", &config.max_range);
+  read(source, "bundle_rays", &config.bundle_rays);
   read(source, "disparity_sigma_px", &config.disparity.disparity_sigma_px);
   read(source, "min_disparity_px", &config.disparity.min_disparity_px);
   read(source, "max_depth_sigma_ratio", &config.disparity.max_depth_sigma_ratio);

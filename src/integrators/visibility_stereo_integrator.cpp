@@ -430,6 +430,50 @@ bool isUsable(const Eigen::Vector3d& point, const Eigen::Vector3d& origin, doubl
   return ((point - origin).array().abs() < limit).all();
 }
 
+bool isUsableRay(const Eigen::Vector3d& point, float sigma, const Eigen::Vector3d& origin,
+                 double resolution, bool needs_direction) {
+  return isUsable(point, origin, resolution, needs_direction) && std::isfinite(sigma) && sigma >= 0;
+}
+
+// bundle_rays: per end voxel the nearest usable point (see VisibilityStereoConfig::bundle_rays),
+// in the order of each voxel's first point, so that neighbouring pixels stay neighbouring rays
+// for the previous-ray cache. Neighbouring pixels mostly share their end voxel, so the last
+// voxel is checked before the hash table.
+std::vector<std::uint32_t> nearestPointPerEndVoxel(const std::vector<Eigen::Vector3f>& points,
+                                                   const std::vector<float>& sigmas,
+                                                   const Eigen::Vector3d& origin, double resolution,
+                                                   bool needs_direction, std::size_t* skipped) {
+  std::vector<std::uint32_t> nearest;
+  std::vector<double> nearest_squared_range;
+  SpatialKeyMap<std::uint32_t> bundle_of_voxel;
+  std::uint64_t last_key = 0;
+  std::uint32_t last_bundle = 0;
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d point = points[i].cast<double>();
+    if (!isUsableRay(point, sigmas[i], origin, resolution, needs_direction)) {
+      ++*skipped;
+      continue;
+    }
+    const std::uint64_t key = packKey(voxelIndexOf(point, resolution));
+    const double squared_range = (point - origin).squaredNorm();
+    if (nearest.empty() || key != last_key) {
+      const auto [it, inserted] =
+          bundle_of_voxel.try_emplace(key, static_cast<std::uint32_t>(nearest.size()));
+      if (inserted) {
+        nearest.push_back(i);
+        nearest_squared_range.push_back(squared_range);
+      }
+      last_key = key;
+      last_bundle = it->second;
+    }
+    if (squared_range < nearest_squared_range[last_bundle]) {  // ties: the first point
+      nearest[last_bundle] = i;
+      nearest_squared_range[last_bundle] = squared_range;
+    }
+  }
+  return nearest;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -461,10 +505,17 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   const FrameContext frame{config_,    phi_,      sensor_origin, map.indexOf(sensor_origin),
                            resolution, neighbours};
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
-  const int count = static_cast<int>(points_in_map.size());
+  std::size_t skipped = 0;
+  std::vector<std::uint32_t> bundles;
+  if (config_.bundle_rays) {
+    bundles = nearestPointPerEndVoxel(points_in_map, range_sigmas, sensor_origin, resolution,
+                                      visibility_mode, &skipped);
+  }
+  // Without bundling every point is a ray; its usability is checked in the parallel loop.
+  const int count = static_cast<int>(config_.bundle_rays ? bundles.size() : points_in_map.size());
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
   std::vector<FrameUpdates> per_thread(threads);
-  std::size_t skipped = 0, visits = 0, hits = 0, invisible = 0;
+  std::size_t visits = 0, hits = 0, invisible = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : skipped, visits, hits, invisible)
   {
     MapSnapshot snapshot(map);
@@ -472,13 +523,18 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     // Chunks of neighbouring pixels keep the previous-ray cache useful on every
     // thread.
 #pragma omp for schedule(dynamic, 512)
-    for (int i = 0; i < count; ++i) {
-      const Eigen::Vector3d point = points_in_map[i].cast<double>();
-      const double sigma = range_sigmas[i];
-      if (!isUsable(point, sensor_origin, resolution, visibility_mode) ||
-          !(std::isfinite(sigma) && sigma >= 0)) {
+    for (int ray = 0; ray < count; ++ray) {
+      const std::uint32_t i = config_.bundle_rays ? bundles[ray] : static_cast<std::uint32_t>(ray);
+      Eigen::Vector3d point = points_in_map[i].cast<double>();
+      const float sigma = range_sigmas[i];
+      if (!config_.bundle_rays &&
+          !isUsableRay(point, sigma, sensor_origin, resolution, visibility_mode)) {
         ++skipped;
         continue;
+      }
+      // discretize = true: OctoMap's bundled ray ends at the end voxel's centre.
+      if (config_.bundle_rays && !visibility_mode) {
+        point = (voxelIndexOf(point, resolution).cast<double>().array() + 0.5) * resolution;
       }
       caster.cast(point, sigma);
     }
@@ -493,7 +549,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
                                 [](const StereoVoxelUpdate& u) { return !(u.visibility > 0); }),
                  updates->end());
   stats.skipped_points = skipped;
-  stats.rays = stats.points - skipped;
+  stats.rays = config_.bundle_rays ? bundles.size() : stats.points - skipped;
+  stats.merged_points = stats.points - skipped - stats.rays;
   stats.voxel_visits = visits;
   stats.cache_hits = hits;
   stats.rays_invisible = invisible;

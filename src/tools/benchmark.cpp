@@ -269,14 +269,16 @@ const std::vector<Workload>& workloads() {
        "      [--input full,half,quarter] [--source gt,sgbm] [--frames N] [--warmup W]\n"
        "      [--repetitions K] [--jitter M] [--jitter_deg D] [--sigma S] [--block_size B]\n"
        "      [--threads T] [--clock cpu|wall] [--unknown_neighbour_occupancy P] [--rtabmap DIR]\n"
-       "      [--parameter_set table_i|fast_expansion]\n"
+       "      [--parameter_set table_i|fast_expansion] [--bundle_rays true|false]\n"
+       "      [--method visibility|octomap]\n"
        "      [--picture PREFIX [--picture_scene S] [--picture_resolution R]]\n"
        "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
        "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
        "      the same points; ratios are ours / octomap",
        {"folder", "resolution", "input", "source", "frames", "warmup", "repetitions", "jitter",
         "jitter_deg", "sigma", "block_size", "threads", "clock", "rtabmap", "picture",
-        "picture_scene", "picture_resolution", "unknown_neighbour_occupancy", "parameter_set"},
+        "picture_scene", "picture_resolution", "unknown_neighbour_occupancy", "parameter_set",
+        "bundle_rays", "method"},
        runDisparity},
       {"disparity-artifacts",
        "[--part all|artifacts|fig5a|sweep] [--frames N] [--resolution R] [--fig5a_updates U]\n"

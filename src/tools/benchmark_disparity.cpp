@@ -154,16 +154,24 @@ struct MapRun {
   double cache_hit_rate = 0.0;
   std::size_t points_per_frame = 0;
   double voxel_visits_per_frame = 0.0;  // voxel steps of all rays (ours only)
+  double rays_per_frame = 0.0;          // rays cast (ours only; fewer than points when bundled)
 };
 
 // P(O) of never-observed neighbours in Eq. 1 (--unknown_neighbour_occupancy); the core's default.
 double g_unknown_neighbour_occupancy = VisibilityStereoConfig().unknown_neighbour_occupancy;
 // The named parameter set (--parameter_set), Table I by default.
 StereoParameterSet g_parameter_set = StereoParameterSet::kTableI;
+// --bundle_rays (one ray per end voxel, VisibilityStereoConfig::bundle_rays) and --method
+// (octomap: our OctoMap mode, whose bundled rays are liboctomap's discretize = true); the core's
+// defaults.
+bool g_bundle_rays = VisibilityStereoConfig().bundle_rays;
+StereoIntegrationMethod g_method = VisibilityStereoConfig().method;
 
 VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
   VisibilityStereoConfig config = visibilityStereoConfigFor(g_parameter_set);
   config.unknown_neighbour_occupancy = g_unknown_neighbour_occupancy;
+  config.bundle_rays = g_bundle_rays;
+  config.method = g_method;
   config.disparity.disparity_sigma_px = sigma_px;
   config.disparity.input_resolution = input;
   return config;
@@ -172,13 +180,14 @@ VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
 MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& poses,
                const VisibilityStereoIntegrator& integrator, VoxelMap* map) {
   MapRun run;
-  std::size_t visits = 0, hits = 0;
+  std::size_t visits = 0, hits = 0, rays = 0;
   const double cpu_start = cpuMilliseconds();
   const auto start = Clock::now();
   for (const Eigen::Isometry3d& pose : poses) {
     const StereoIntegrationStats stats = integrator.integrate(view.view(), view.camera, pose, map);
     visits += stats.voxel_visits;
     hits += stats.cache_hits;
+    rays += stats.rays;
     run.points_per_frame = stats.points - stats.skipped_points;
   }
   run.wall_ms_per_frame = millisecondsSince(start) / poses.size();
@@ -186,6 +195,7 @@ MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& pos
   run.memory_bytes = map->memoryBytes();
   run.cache_hit_rate = visits == 0 ? 0.0 : static_cast<double>(hits) / visits;
   run.voxel_visits_per_frame = static_cast<double>(visits) / poses.size();
+  run.rays_per_frame = static_cast<double>(rays) / poses.size();
   return run;
 }
 
@@ -537,13 +547,14 @@ void printCase(const char* prefix, const CaseResult& c) {
       "%smap scene=%s source=%s resolution=%g input=%s blocks=%zu block_bytes=%zu "
       "known_voxels=%zu known_per_block=%.1f occupied_voxels=%zu all_free_blocks=%zu "
       "octomap_nodes=%zu octomap_leaves=%zu block_storage_kb=%.0f block_storage_ratio=%.3f "
-      "voxel_visits_per_frame=%.0f walk_only_cpu_ms_per_frame=%.2f walk_only_steps_per_frame=%.0f "
+      "voxel_visits_per_frame=%.0f rays_per_frame=%.0f walk_only_cpu_ms_per_frame=%.2f "
+      "walk_only_steps_per_frame=%.0f "
       "checksum=%016llx\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
       sizeof(VoxelBlock), m.known_voxels,
       m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
       m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, block_storage / 1024.0,
-      block_storage / c.plain.memory_bytes, c.ours.voxel_visits_per_frame,
+      block_storage / c.plain.memory_bytes, c.ours.voxel_visits_per_frame, c.ours.rays_per_frame,
       c.walk_only.cpu_ms_per_frame, c.walk_only.steps_per_frame,
       static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
@@ -691,6 +702,10 @@ int runDisparity(const CommandLine& args) {
   g_parameter_set = stereoParameterSetFromString(args.value("parameter_set", "table_i"));
   g_unknown_neighbour_occupancy =
       args.doubleValue("unknown_neighbour_occupancy", g_unknown_neighbour_occupancy);
+  const std::string bundle = args.value("bundle_rays", g_bundle_rays ? "true" : "false");
+  if (bundle != "true" && bundle != "false") throw UsageError("--bundle_rays takes true or false");
+  g_bundle_rays = bundle == "true";
+  g_method = stereoIntegrationMethodFromString(args.value("method", toString(g_method)));
   options.sgbm.block_size = args.intValue("block_size", 5);
   options.picture = args.value("picture", "");
   options.picture_scene = args.value("picture_scene", "Motorcycle");
@@ -763,11 +778,12 @@ int runDisparity(const CommandLine& args) {
             "disparity resolution=%g input=%s ms_per_frame=%.2f octomap_ms_per_frame=%.2f "
             "time_ratio=%.3f memory_ratio=%.3f source=%s scenes=%d "
             "octomap_discretize_ms_per_frame=%.2f time_ratio_discretize=%.3f threads=%d clock=%s "
-            "warmup=%d\n",
+            "warmup=%d bundle_rays=%s method=%s\n",
             resolution, toString(input).c_str(), ours_ms / scenes, plain_ms / scenes,
             ours_ms / plain_ms, ours_mem / octomap_mem, source.c_str(), scenes,
             discretized_ms / scenes, ours_ms / discretized_ms, options.threads,
-            options.cpu_clock ? "cpu" : "wall", options.warmup);
+            options.cpu_clock ? "cpu" : "wall", options.warmup, g_bundle_rays ? "true" : "false",
+            toString(g_method).c_str());
       }
     }
   }

@@ -73,6 +73,22 @@ struct VisibilityStereoConfig {
   // m, as OctoMap's maxrange: a point farther from the sensor clears its ray up to this
   // distance (the voxel holding the cut is left out) and adds no hit. Negative: unlimited.
   double max_range = -1.0;
+  // End-voxel ray bundling, the analogue of OctoMap's insertPointCloud(discretize = true): the
+  // points of a frame whose measured point falls into the same voxel share one ray. A standing
+  // camera's far surfaces give tens of pixels per voxel, and every ray is walked voxel by voxel,
+  // so this bounds the frame's work by its end voxels instead of its pixels.
+  //  - kVisibility: the bundle's ray is the nearest point's (smallest range), with that point's
+  //    own range sigma. The frame's per-voxel reduction takes the largest P(I_v) over its rays
+  //    (StereoVoxelUpdate), and near the end voxel that is the nearest point's: Phi((s - r) /
+  //    sigma_r) grows as r falls, and sigma_z = lambda z^2 (Eq. 7) is smallest for it too, so
+  //    its Eq. 8 step reaches P(I_v) >= inside_stop_probability first. What the bundle loses
+  //    is the other points' rays where they leave the nearest one's voxels: the lateral spread
+  //    within one voxel, and the weaker P(I_v) of the deeper points past the stop voxel. A mean
+  //    depth would move the bundle's hit deeper than any unbundled frame puts it.
+  //  - kOctomap: the ray ends at the end voxel's centre, as liboctomap's discretize = true does
+  //    (the depth of the point does not enter OctoMap's update), so the two compare directly.
+  // Points beyond max_range are bundled like the others (the nearest point decides the clip).
+  bool bundle_rays = true;
   // The disparity image's conversion to points (sigma_d of Eq. 7, input
   // resolution).
   DisparityConversionConfig disparity;
@@ -151,7 +167,8 @@ struct StereoIntegrationStats {
   // integrate(disparity image) only: valid disparities dropped before ray casting because their
   // sigma_z / z exceeds disparity.max_depth_sigma_ratio (not counted in points)
   std::size_t dropped_uncertain = 0;
-  std::size_t rays = 0;            // rays cast
+  std::size_t rays = 0;            // rays cast (bundle_rays: one per end voxel)
+  std::size_t merged_points = 0;   // bundle_rays: usable points merged into another point's ray
   std::size_t rays_invisible = 0;  // rays stopped early because P(V) fell below q_min
   std::size_t voxel_visits = 0;    // voxels walked over all rays
   std::size_t cache_hits = 0;      // of those, found through the previous-ray cache

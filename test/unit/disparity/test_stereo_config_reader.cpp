@@ -94,6 +94,7 @@ TEST(StereoConfigReader, ReadsEveryField) {
       {"stereo/unknown_neighbour_occupancy", "0.35"},
       {"stereo/inside_stop_probability", "0.95"},
       {"stereo/max_range", "7.5"},
+      {"stereo/bundle_rays", "false"},
       {"stereo/disparity_sigma_px", "0.25"},
       {"stereo/min_disparity_px", "2"},
       {"stereo/max_depth_sigma_ratio", "0.4"},
@@ -111,6 +112,8 @@ TEST(StereoConfigReader, ReadsEveryField) {
   EXPECT_DOUBLE_EQ(config.unknown_neighbour_occupancy, 0.35);
   EXPECT_DOUBLE_EQ(config.inside_stop_probability, 0.95);
   EXPECT_DOUBLE_EQ(config.max_range, 7.5);
+  EXPECT_FALSE(config.bundle_rays);
+  EXPECT_TRUE(VisibilityStereoConfig().bundle_rays);  // so that reading "false" is seen
   EXPECT_DOUBLE_EQ(config.disparity.disparity_sigma_px, 0.25);
   EXPECT_DOUBLE_EQ(config.disparity.min_disparity_px, 2.0);
   EXPECT_DOUBLE_EQ(config.disparity.max_depth_sigma_ratio, 0.4);
@@ -188,6 +191,7 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
                                           "unknown_neighbour_occupancy",
                                           "inside_stop_probability",
                                           "max_range",
+                                          "bundle_rays",
                                           "disparity_sigma_px",
                                           "min_disparity_px",
                                           "max_depth_sigma_ratio",
@@ -216,6 +220,7 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
   EXPECT_DOUBLE_EQ(from_file.unknown_occupancy, defaults.unknown_occupancy);
   EXPECT_DOUBLE_EQ(from_file.unknown_neighbour_occupancy, defaults.unknown_neighbour_occupancy);
   EXPECT_DOUBLE_EQ(from_file.inside_stop_probability, defaults.inside_stop_probability);
+  EXPECT_EQ(from_file.bundle_rays, defaults.bundle_rays);
   EXPECT_DOUBLE_EQ(from_file.disparity.disparity_sigma_px, defaults.disparity.disparity_sigma_px);
   EXPECT_EQ(from_file.disparity.input_resolution, defaults.disparity.input_resolution);
 }

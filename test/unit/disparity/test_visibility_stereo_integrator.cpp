@@ -6,18 +6,27 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <tuple>
 #include <vector>
 
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 
 namespace occupancy_fusion {
 namespace {
 
 const VisibilityStereoConfig kTableI;  // the defaults are Table I's values
+
+// One ray per point (bundle_rays off): the tests of the per-ray reduction and of the OctoMap
+// equivalence with the per-point integrator.
+VisibilityStereoConfig perRay(VisibilityStereoConfig config = {}) {
+  config.bundle_rays = false;
+  return config;
+}
 
 double logOddsOf(double p) { return std::log(p / (1 - p)); }
 
@@ -243,7 +252,7 @@ TEST(VisibilityStereoIntegratorTest, OneUpdatePerVoxelTakesTheLargestInsideAndVi
   VoxelMap map(mapConfig());
   scatter(3, &map);
   const RandomFrame frame = randomFrame(60, 4);
-  const VisibilityStereoIntegrator integrator(kTableI);
+  const VisibilityStereoIntegrator integrator(perRay());
   std::vector<StereoVoxelUpdate> updates;
   integrator.computeUpdates(frame.points, frame.sigmas, kOrigin, map, &updates);
   const UpdateTable together = asTable(updates);
@@ -285,7 +294,7 @@ TEST(VisibilityStereoIntegratorTest, CacheDoesNotChangeTheResult) {
     sorted.points.push_back(frame.points[i]);
     sorted.sigmas.push_back(frame.sigmas[i]);
   }
-  const VisibilityStereoIntegrator integrator(kTableI);
+  const VisibilityStereoIntegrator integrator(perRay());
   std::vector<StereoVoxelUpdate> a, b;
   const StereoIntegrationStats random_stats =
       integrator.computeUpdates(frame.points, frame.sigmas, kOrigin, map, &a);
@@ -298,7 +307,7 @@ TEST(VisibilityStereoIntegratorTest, CacheDoesNotChangeTheResult) {
 }
 
 void expectOctomapModeEqualsPointCloudIntegrator(double max_range) {
-  VisibilityStereoConfig config;
+  VisibilityStereoConfig config = perRay();
   config.method = StereoIntegrationMethod::kOctomap;
   config.max_range = max_range;
   const VisibilityStereoIntegrator stereo(config);
@@ -331,6 +340,134 @@ TEST(VisibilityStereoIntegratorTest, OctomapModeEqualsPointCloudIntegrator) {
 TEST(VisibilityStereoIntegratorTest, OctomapModeMaxRangeEqualsPointCloudIntegrator) {
   // The points lie 1-3.4 m away: about half are beyond 2 m and clear their rays up to 2 m only.
   expectOctomapModeEqualsPointCloudIntegrator(2.0);
+}
+
+// bundle_rays: groups of points sharing a voxel at different depths and lateral positions, as the
+// pixels of a far surface; some groups come back later (the hash table rather than the last
+// voxel finds them) and some voxels are drawn twice.
+RandomFrame crowdedFrame(unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> x(10, 29), y(-10, 10), z(-5, 5), size(1, 12);
+  std::uniform_real_distribution<float> within(0.01f, 0.99f), sigma(0.0f, 0.2f);
+  std::vector<VoxelIndex> voxels;
+  for (int v = 0; v < 60; ++v) voxels.emplace_back(x(random), y(random), z(random));
+  for (int v = 0; v < 20; ++v) voxels.push_back(voxels[v * 2]);  // a later group of a voxel
+  RandomFrame frame;
+  for (const VoxelIndex& voxel : voxels) {
+    for (int i = size(random); i > 0; --i) {
+      const Eigen::Vector3f in_voxel(within(random), within(random), within(random));
+      frame.points.push_back((voxel.cast<float>() + in_voxel) * static_cast<float>(kRes));
+      frame.sigmas.push_back(sigma(random));
+    }
+  }
+  return frame;
+}
+
+// Per voxel the nearest point (the first of equals), in the order of the voxels' first points.
+RandomFrame nearestPerVoxel(const RandomFrame& frame, const Eigen::Vector3d& origin) {
+  std::map<std::tuple<int, int, int>, std::size_t> slot_of_voxel;
+  RandomFrame nearest;
+  for (std::size_t i = 0; i < frame.points.size(); ++i) {
+    const Eigen::Vector3d point = frame.points[i].cast<double>();
+    const VoxelIndex v = voxelIndexOf(point, kRes);
+    const auto [it, inserted] =
+        slot_of_voxel.try_emplace(std::make_tuple(v.x(), v.y(), v.z()), nearest.points.size());
+    if (inserted) {
+      nearest.points.push_back(frame.points[i]);
+      nearest.sigmas.push_back(frame.sigmas[i]);
+    } else if ((point - origin).squaredNorm() <
+               (nearest.points[it->second].cast<double>() - origin).squaredNorm()) {
+      nearest.points[it->second] = frame.points[i];
+      nearest.sigmas[it->second] = frame.sigmas[i];
+    }
+  }
+  return nearest;
+}
+
+TEST(VisibilityStereoIntegratorTest, BundledRaysAreTheNearestPointPerEndVoxel) {
+  VoxelMap map(mapConfig());
+  scatter(7, &map);
+  const RandomFrame frame = crowdedFrame(8);
+  const RandomFrame nearest = nearestPerVoxel(frame, kOrigin);
+  ASSERT_LT(2 * nearest.points.size(), frame.points.size());
+  std::vector<StereoVoxelUpdate> bundled, expected, unbundled;
+  const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
+      frame.points, frame.sigmas, kOrigin, map, &bundled);
+  const StereoIntegrationStats nearest_stats = VisibilityStereoIntegrator(perRay()).computeUpdates(
+      nearest.points, nearest.sigmas, kOrigin, map, &expected);
+  VisibilityStereoIntegrator(perRay()).computeUpdates(frame.points, frame.sigmas, kOrigin, map,
+                                                      &unbundled);
+  EXPECT_EQ(asTable(bundled), asTable(expected));
+  EXPECT_EQ(stats.rays, nearest.points.size());
+  EXPECT_EQ(stats.merged_points, frame.points.size() - nearest.points.size());
+  EXPECT_EQ(stats.voxel_visits, nearest_stats.voxel_visits);
+  // The other points' rays did add updates of their own, which bundling leaves out.
+  EXPECT_NE(asTable(bundled), asTable(unbundled));
+}
+
+TEST(VisibilityStereoIntegratorTest, BundlingChangesNothingWithOnePointPerVoxel) {
+  // Near the camera, where every pixel has a voxel of its own.
+  VoxelMap map(mapConfig());
+  scatter(9, &map);
+  const RandomFrame frame = nearestPerVoxel(randomFrame(400, 10), kOrigin);
+  std::vector<StereoVoxelUpdate> bundled, unbundled;
+  const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
+      frame.points, frame.sigmas, kOrigin, map, &bundled);
+  VisibilityStereoIntegrator(perRay()).computeUpdates(frame.points, frame.sigmas, kOrigin, map,
+                                                      &unbundled);
+  EXPECT_EQ(stats.merged_points, 0u);
+  EXPECT_EQ(asTable(bundled), asTable(unbundled));
+}
+
+TEST(VisibilityStereoIntegratorTest, BundleKeepsTheNearestPointsHitOnly) {
+  // Two points in voxel 15 with a tiny sigma: 1.52 m (before voxel 15's centre at 1.55, which
+  // gets its full hit) and 1.58 m (past the centre: P(I) = 0 there, the full hit goes to voxel
+  // 16). One ray per point hits voxels 15 and 16; the bundle is the 1.52 m point's ray alone.
+  const Eigen::Vector3f deeper(1.58f, 0.05f, 0.05f);
+  VoxelMap bundled(mapConfig()), unbundled(mapConfig()), nearest_only(mapConfig());
+  for (VoxelMap* map : {&bundled, &unbundled, &nearest_only}) fillFreeCorridor(false, map);
+  VisibilityStereoIntegrator(kTableI).integrate({deeper, kPoint}, {kTinySigma, kTinySigma}, kOrigin,
+                                                &bundled);
+  VisibilityStereoIntegrator(perRay()).integrate({deeper, kPoint}, {kTinySigma, kTinySigma},
+                                                 kOrigin, &unbundled);
+  integrateOnePoint(perRay(), &nearest_only);
+  const double hit = occupancyAfterMeasurement(0.3, true, 1.0, kTableI);
+  EXPECT_NEAR(probabilityAt(unbundled, 15), hit, 1e-6);
+  EXPECT_NEAR(probabilityAt(unbundled, 16), hit, 1e-6);
+  EXPECT_NEAR(probabilityAt(bundled, 15), hit, 1e-6);
+  EXPECT_NEAR(probabilityAt(bundled, 16), 0.3, 1e-6);
+  nearest_only.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    EXPECT_EQ(bundled.logOdds(index), std::optional<float>(value));
+  });
+}
+
+TEST(VisibilityStereoIntegratorTest, BundledOctomapModeIsDiscretizedPointCloud) {
+  // liboctomap's insertPointCloud(discretize = true): one ray per end voxel, to its centre.
+  VisibilityStereoConfig config;
+  config.method = StereoIntegrationMethod::kOctomap;
+  const VisibilityStereoIntegrator stereo(config);
+  const PointCloudIntegrator cloud{PointCloudIntegratorConfig{}};
+  VoxelMap ours(mapConfig()), reference(mapConfig()), per_point(mapConfig());
+  for (unsigned frame = 0; frame < 3; ++frame) {
+    const RandomFrame points = crowdedFrame(20 + frame);
+    // Off the voxel lattice: a ray from a voxel corner to voxel centres passes exactly through
+    // other corners, where the float centres here and the integrator's double ones could pick
+    // different voxels.
+    const Eigen::Vector3d origin(0.013 + 0.03 * frame, -0.021 * frame - 0.007, 0.017);
+    std::vector<Eigen::Vector3f> centres;
+    for (const Eigen::Vector3f& point : nearestPerVoxel(points, origin).points) {
+      const VoxelIndex v = voxelIndexOf(point.cast<double>(), kRes);
+      centres.push_back(((v.cast<double>().array() + 0.5) * kRes).cast<float>());
+    }
+    stereo.integrate(points.points, points.sigmas, origin, &ours);
+    cloud.integrate(centres, origin, &reference);
+    cloud.integrate(points.points, origin, &per_point);
+  }
+  ASSERT_EQ(ours.knownVoxelCount(), reference.knownVoxelCount());
+  reference.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    EXPECT_EQ(ours.logOdds(index), std::optional<float>(value));
+  });
+  EXPECT_LT(ours.knownVoxelCount(), per_point.knownVoxelCount());  // fewer rays, fewer voxels
 }
 
 TEST(VisibilityStereoIntegratorTest, MaxRangeClearsUpToTheRangeWithoutAHit) {
