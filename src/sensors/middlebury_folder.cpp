@@ -238,9 +238,18 @@ MiddleburyCalibration parseMiddleburyCalibration(const std::string& text) {
       entries.count("cam1") != 0 ? matrixEntry(entries, "cam1")(0, 2) : calibration.cx0;
   calibration.doffs = optionalNumber("doffs", calibration.cx1 - calibration.cx0);
   calibration.baseline_m = 1e-3 * numberEntry(entries, "baseline");
-  calibration.width = static_cast<int>(optionalNumber("width", 0.0));
-  calibration.height = static_cast<int>(optionalNumber("height", 0.0));
-  calibration.ndisp = static_cast<int>(optionalNumber("ndisp", 0.0));
+  // Checked before the conversion to int, which is undefined for values out of its range.
+  const auto optionalCount = [&](const std::string& key) {
+    const double value = optionalNumber(key, 0.0);
+    if (!(value >= 0.0 && value <= std::numeric_limits<int>::max())) {
+      throw std::runtime_error("calib.txt: " + key + " must be a count of pixels, got " +
+                               entries.at(key));
+    }
+    return static_cast<int>(value);
+  };
+  calibration.width = optionalCount("width");
+  calibration.height = optionalCount("height");
+  calibration.ndisp = optionalCount("ndisp");
   calibration.vmin = optionalNumber("vmin", 0.0);
   calibration.vmax = optionalNumber("vmax", 0.0);
   if (!(calibration.fx > 0.0 && calibration.fy > 0.0)) {
