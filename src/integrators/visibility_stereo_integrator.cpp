@@ -435,16 +435,22 @@ bool isUsableRay(const Eigen::Vector3d& point, float sigma, const Eigen::Vector3
   return isUsable(point, origin, resolution, needs_direction) && std::isfinite(sigma) && sigma >= 0;
 }
 
-// bundle_rays: per end voxel the nearest usable point (see VisibilityStereoConfig::bundle_rays),
-// in the order of each voxel's first point, so that neighbouring pixels stay neighbouring rays
-// for the previous-ray cache. Neighbouring pixels mostly share their end voxel, so the last
-// voxel is checked before the hash table.
-std::vector<std::uint32_t> nearestPointPerEndVoxel(const std::vector<Eigen::Vector3f>& points,
-                                                   const std::vector<float>& sigmas,
-                                                   const Eigen::Vector3d& origin, double resolution,
-                                                   bool needs_direction, std::size_t* skipped) {
-  std::vector<std::uint32_t> nearest;
-  std::vector<double> nearest_squared_range;
+// bundle_rays: per end voxel the nearest and the farthest usable point (see
+// VisibilityStereoConfig::bundle_rays), in the order of each voxel's first point, so that
+// neighbouring pixels stay neighbouring rays for the previous-ray cache; one ray where they are the
+// same point, and always one for OctoMap's update, whose ray ends at the voxel's centre.
+// Neighbouring pixels mostly share their end voxel, so the last voxel is checked
+// before the hash table.
+std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3f>& points,
+                                                const std::vector<float>& sigmas,
+                                                const Eigen::Vector3d& origin, double resolution,
+                                                bool visibility_mode, std::size_t* skipped) {
+  const bool needs_direction = visibility_mode, needs_depth = visibility_mode;
+  struct Bundle {
+    std::uint32_t nearest, farthest;
+    double nearest_squared_range, farthest_squared_range;
+  };
+  std::vector<Bundle> bundles;
   SpatialKeyMap<std::uint32_t> bundle_of_voxel;
   std::uint64_t last_key = 0;
   std::uint32_t last_bundle = 0;
@@ -456,22 +462,30 @@ std::vector<std::uint32_t> nearestPointPerEndVoxel(const std::vector<Eigen::Vect
     }
     const std::uint64_t key = packKey(voxelIndexOf(point, resolution));
     const double squared_range = (point - origin).squaredNorm();
-    if (nearest.empty() || key != last_key) {
+    if (bundles.empty() || key != last_key) {
       const auto [it, inserted] =
-          bundle_of_voxel.try_emplace(key, static_cast<std::uint32_t>(nearest.size()));
-      if (inserted) {
-        nearest.push_back(i);
-        nearest_squared_range.push_back(squared_range);
-      }
+          bundle_of_voxel.try_emplace(key, static_cast<std::uint32_t>(bundles.size()));
+      if (inserted) bundles.push_back({i, i, squared_range, squared_range});
       last_key = key;
       last_bundle = it->second;
     }
-    if (squared_range < nearest_squared_range[last_bundle]) {  // ties: the first point
-      nearest[last_bundle] = i;
-      nearest_squared_range[last_bundle] = squared_range;
+    Bundle& bundle = bundles[last_bundle];
+    if (squared_range < bundle.nearest_squared_range) {  // ties: the first point
+      bundle.nearest = i;
+      bundle.nearest_squared_range = squared_range;
+    }
+    if (squared_range > bundle.farthest_squared_range) {
+      bundle.farthest = i;
+      bundle.farthest_squared_range = squared_range;
     }
   }
-  return nearest;
+  std::vector<std::uint32_t> rays;
+  rays.reserve(2 * bundles.size());
+  for (const Bundle& bundle : bundles) {
+    rays.push_back(bundle.nearest);
+    if (needs_depth && bundle.farthest != bundle.nearest) rays.push_back(bundle.farthest);
+  }
+  return rays;
 }
 
 }  // namespace
@@ -508,8 +522,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   std::size_t skipped = 0;
   std::vector<std::uint32_t> bundles;
   if (config_.bundle_rays) {
-    bundles = nearestPointPerEndVoxel(points_in_map, range_sigmas, sensor_origin, resolution,
-                                      visibility_mode, &skipped);
+    bundles = bundleRaysByEndVoxel(points_in_map, range_sigmas, sensor_origin, resolution,
+                                   visibility_mode, &skipped);
   }
   // Without bundling every point is a ray; its usability is checked in the parallel loop.
   const int count = static_cast<int>(config_.bundle_rays ? bundles.size() : points_in_map.size());

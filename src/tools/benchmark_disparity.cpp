@@ -362,6 +362,32 @@ MapContents mapContents(const VoxelMap& map) {
   return contents;
 }
 
+// Coverage: the fraction of the voxels holding ground-truth points of the view that have an
+// occupied voxel within one voxel (the slack of trueSurface). Counts each surface voxel once, so a
+// surface mapped thicker does not count more.
+double surfaceCoverage(const StereoView& truth, const std::vector<Eigen::Vector3d>& occupied,
+                       const VoxelMap& grid) {
+  SpatialKeySet near_occupied;
+  for (const Eigen::Vector3d& c : occupied) {
+    const VoxelIndex center = grid.indexOf(c);
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx)
+          near_occupied.insert(packKey(VoxelIndex(center + VoxelIndex(dx, dy, dz))));
+      }
+    }
+  }
+  SpatialKeySet truth_voxels;
+  const StereoPoints points =
+      disparityToPoints(truth.view(), truth.camera, DisparityConversionConfig{});
+  for (const Eigen::Vector3f& p : points.points) {
+    truth_voxels.insert(packKey(grid.indexOf(p.cast<double>())));
+  }
+  std::size_t covered = 0;
+  for (const std::uint64_t key : truth_voxels) covered += near_occupied.count(key);
+  return truth_voxels.empty() ? 0.0 : static_cast<double>(covered) / truth_voxels.size();
+}
+
 std::size_t countOffSurface(const std::vector<Eigen::Vector3d>& centers,
                             const SpatialKeySet& surface, const VoxelMap& grid) {
   std::size_t off = 0;
@@ -450,6 +476,7 @@ struct CaseResult {
   MapRun ours, plain, discretized;
   std::size_t ours_occupied = 0, octomap_occupied = 0;
   std::size_t ours_off_surface = 0, octomap_off_surface = 0;
+  double ours_coverage = 0.0, octomap_coverage = 0.0;  // surfaceCoverage
   MapContents contents;
   std::size_t octomap_nodes = 0, octomap_leaves = 0;
   WalkOnly walk_only;
@@ -507,6 +534,8 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
       result.octomap_occupied = octomap_occupied.size();
       result.ours_off_surface = countOffSurface(ours_occupied, surface, map);
       result.octomap_off_surface = countOffSurface(octomap_occupied, surface, map);
+      result.ours_coverage = surfaceCoverage(truth, ours_occupied, map);
+      result.octomap_coverage = surfaceCoverage(truth, octomap_occupied, map);
       result.contents = mapContents(map);
       result.octomap_nodes = plain_tree.size();
       result.octomap_leaves = plain_tree.getNumLeafNodes();
@@ -528,7 +557,8 @@ void printCase(const char* prefix, const CaseResult& c) {
       "octomap_ms_per_frame=%.2f octomap_discretize_ms_per_frame=%.2f time_ratio=%.3f "
       "time_ratio_discretize=%.3f memory_kb=%.0f octomap_memory_kb=%.0f memory_ratio=%.3f "
       "cache_hit_rate=%.3f occupied=%zu off_surface=%zu octomap_occupied=%zu "
-      "octomap_off_surface=%zu wall_ms_per_frame=%.2f octomap_wall_ms_per_frame=%.2f\n",
+      "octomap_off_surface=%zu coverage=%.3f octomap_coverage=%.3f wall_ms_per_frame=%.2f "
+      "octomap_wall_ms_per_frame=%.2f\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(),
       c.ours.points_per_frame, c.ours.ms_per_frame, c.plain.ms_per_frame,
       c.discretized.ms_per_frame, c.ours.ms_per_frame / c.plain.ms_per_frame,
@@ -536,7 +566,7 @@ void printCase(const char* prefix, const CaseResult& c) {
       c.plain.memory_bytes / 1024.0,
       static_cast<double>(c.ours.memory_bytes) / c.plain.memory_bytes, c.ours.cache_hit_rate,
       c.ours_occupied, c.ours_off_surface, c.octomap_occupied, c.octomap_off_surface,
-      c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame);
+      c.ours_coverage, c.octomap_coverage, c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame);
   // Where the memory goes: dense blocks against the octree's (pruned) nodes.
   const MapContents& m = c.contents;
   // The blocks alone, without the hash table and VoxelMap's change log (which memoryBytes()

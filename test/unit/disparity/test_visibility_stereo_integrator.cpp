@@ -363,33 +363,41 @@ RandomFrame crowdedFrame(unsigned seed) {
   return frame;
 }
 
-// Per voxel the nearest point (the first of equals), in the order of the voxels' first points.
-RandomFrame nearestPerVoxel(const RandomFrame& frame, const Eigen::Vector3d& origin) {
-  std::map<std::tuple<int, int, int>, std::size_t> slot_of_voxel;
-  RandomFrame nearest;
+// Per voxel the nearest and the farthest point (the first of equals; one point if they are the
+// same), in the order of the voxels' first points; only the nearest with ends = 1.
+RandomFrame endsPerVoxel(const RandomFrame& frame, const Eigen::Vector3d& origin, int ends = 2) {
+  std::map<std::tuple<int, int, int>, std::pair<std::size_t, std::size_t>> ends_of_voxel;
+  std::vector<std::tuple<int, int, int>> order;
+  const auto range = [&](std::size_t i) {
+    return (frame.points[i].cast<double>() - origin).squaredNorm();
+  };
   for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    const Eigen::Vector3d point = frame.points[i].cast<double>();
-    const VoxelIndex v = voxelIndexOf(point, kRes);
-    const auto [it, inserted] =
-        slot_of_voxel.try_emplace(std::make_tuple(v.x(), v.y(), v.z()), nearest.points.size());
-    if (inserted) {
-      nearest.points.push_back(frame.points[i]);
-      nearest.sigmas.push_back(frame.sigmas[i]);
-    } else if ((point - origin).squaredNorm() <
-               (nearest.points[it->second].cast<double>() - origin).squaredNorm()) {
-      nearest.points[it->second] = frame.points[i];
-      nearest.sigmas[it->second] = frame.sigmas[i];
+    const VoxelIndex v = voxelIndexOf(frame.points[i].cast<double>(), kRes);
+    const auto key = std::make_tuple(v.x(), v.y(), v.z());
+    const auto [it, inserted] = ends_of_voxel.try_emplace(key, i, i);
+    if (inserted) order.push_back(key);
+    if (range(i) < range(it->second.first)) it->second.first = i;
+    if (range(i) > range(it->second.second)) it->second.second = i;
+  }
+  RandomFrame selected;
+  for (const auto& key : order) {
+    const auto [nearest, farthest] = ends_of_voxel.at(key);
+    selected.points.push_back(frame.points[nearest]);
+    selected.sigmas.push_back(frame.sigmas[nearest]);
+    if (ends == 2 && farthest != nearest) {
+      selected.points.push_back(frame.points[farthest]);
+      selected.sigmas.push_back(frame.sigmas[farthest]);
     }
   }
-  return nearest;
+  return selected;
 }
 
-TEST(VisibilityStereoIntegratorTest, BundledRaysAreTheNearestPointPerEndVoxel) {
+TEST(VisibilityStereoIntegratorTest, BundledRaysAreTheNearestAndFarthestPointPerEndVoxel) {
   VoxelMap map(mapConfig());
   scatter(7, &map);
   const RandomFrame frame = crowdedFrame(8);
-  const RandomFrame nearest = nearestPerVoxel(frame, kOrigin);
-  ASSERT_LT(2 * nearest.points.size(), frame.points.size());
+  const RandomFrame nearest = endsPerVoxel(frame, kOrigin);
+  ASSERT_LT(3 * nearest.points.size(), 2 * frame.points.size());
   std::vector<StereoVoxelUpdate> bundled, expected, unbundled;
   const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
       frame.points, frame.sigmas, kOrigin, map, &bundled);
@@ -409,7 +417,7 @@ TEST(VisibilityStereoIntegratorTest, BundlingChangesNothingWithOnePointPerVoxel)
   // Near the camera, where every pixel has a voxel of its own.
   VoxelMap map(mapConfig());
   scatter(9, &map);
-  const RandomFrame frame = nearestPerVoxel(randomFrame(400, 10), kOrigin);
+  const RandomFrame frame = endsPerVoxel(randomFrame(400, 10), kOrigin, 1);
   std::vector<StereoVoxelUpdate> bundled, unbundled;
   const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
       frame.points, frame.sigmas, kOrigin, map, &bundled);
@@ -419,24 +427,29 @@ TEST(VisibilityStereoIntegratorTest, BundlingChangesNothingWithOnePointPerVoxel)
   EXPECT_EQ(asTable(bundled), asTable(unbundled));
 }
 
-TEST(VisibilityStereoIntegratorTest, BundleKeepsTheNearestPointsHitOnly) {
-  // Two points in voxel 15 with a tiny sigma: 1.52 m (before voxel 15's centre at 1.55, which
-  // gets its full hit) and 1.58 m (past the centre: P(I) = 0 there, the full hit goes to voxel
-  // 16). One ray per point hits voxels 15 and 16; the bundle is the 1.52 m point's ray alone.
-  const Eigen::Vector3f deeper(1.58f, 0.05f, 0.05f);
+TEST(VisibilityStereoIntegratorTest, BundleKeepsTheHitsOfTheNearestAndFarthestPoint) {
+  // Three points in voxel 15 on one line, tiny sigma: 1.52 m (before voxel 15's centre at 1.55,
+  // which gets its full hit), 1.55 and 1.58 m (at and past the centre: the full hit goes to voxel
+  // 16). The bundle casts the first and the last: both hits stay. The nearest point alone would
+  // lose voxel 16's.
+  const Eigen::Vector3f middle(1.55f, 0.05f, 0.05f), deeper(1.58f, 0.05f, 0.05f);
+  const std::vector<Eigen::Vector3f> points = {middle, deeper, kPoint};
+  const std::vector<float> sigmas(3, kTinySigma);
   VoxelMap bundled(mapConfig()), unbundled(mapConfig()), nearest_only(mapConfig());
   for (VoxelMap* map : {&bundled, &unbundled, &nearest_only}) fillFreeCorridor(false, map);
-  VisibilityStereoIntegrator(kTableI).integrate({deeper, kPoint}, {kTinySigma, kTinySigma}, kOrigin,
-                                                &bundled);
-  VisibilityStereoIntegrator(perRay()).integrate({deeper, kPoint}, {kTinySigma, kTinySigma},
-                                                 kOrigin, &unbundled);
+  const StereoIntegrationStats stats =
+      VisibilityStereoIntegrator(kTableI).integrate(points, sigmas, kOrigin, &bundled);
+  VisibilityStereoIntegrator(perRay()).integrate(points, sigmas, kOrigin, &unbundled);
   integrateOnePoint(perRay(), &nearest_only);
+  EXPECT_EQ(stats.rays, 2u);
+  EXPECT_EQ(stats.merged_points, 1u);
   const double hit = occupancyAfterMeasurement(0.3, true, 1.0, kTableI);
-  EXPECT_NEAR(probabilityAt(unbundled, 15), hit, 1e-6);
-  EXPECT_NEAR(probabilityAt(unbundled, 16), hit, 1e-6);
-  EXPECT_NEAR(probabilityAt(bundled, 15), hit, 1e-6);
-  EXPECT_NEAR(probabilityAt(bundled, 16), 0.3, 1e-6);
-  nearest_only.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+  for (const VoxelMap* map : {&bundled, &unbundled}) {
+    EXPECT_NEAR(probabilityAt(*map, 15), hit, 1e-6);
+    EXPECT_NEAR(probabilityAt(*map, 16), hit, 1e-6);
+  }
+  EXPECT_NEAR(probabilityAt(nearest_only, 16), 0.3, 1e-6);
+  unbundled.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
     EXPECT_EQ(bundled.logOdds(index), std::optional<float>(value));
   });
 }
@@ -455,7 +468,7 @@ TEST(VisibilityStereoIntegratorTest, BundledOctomapModeIsDiscretizedPointCloud) 
     // different voxels.
     const Eigen::Vector3d origin(0.013 + 0.03 * frame, -0.021 * frame - 0.007, 0.017);
     std::vector<Eigen::Vector3f> centres;
-    for (const Eigen::Vector3f& point : nearestPerVoxel(points, origin).points) {
+    for (const Eigen::Vector3f& point : endsPerVoxel(points, origin, 1).points) {
       const VoxelIndex v = voxelIndexOf(point.cast<double>(), kRes);
       centres.push_back(((v.cast<double>().array() + 0.5) * kRes).cast<float>());
     }
