@@ -81,6 +81,13 @@ class Observer {
         }));
   }
 
+  // The spinner's threads may be inside a callback while the test suite tears down: shut the
+  // subscriptions down first (shutdown() waits for a running callback), then the members they use
+  // are destroyed.
+  ~Observer() {
+    for (ros::Subscriber& subscriber : subscribers_) subscriber.shutdown();
+  }
+
   std::size_t sent(const std::string& topic) const {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto found = sent_.find(topic);
