@@ -153,7 +153,13 @@ MapPublisher::MapPublisher(const ros::NodeHandle& node_handle,
 
 void MapPublisher::onTimer(const ros::WallTimerEvent& /*event*/) {
   publishCycle();
-  diagnostics_.update();
+  // Paced by wall time: Updater::update() waits until ROS time passes its next due time, which a
+  // looped bag's clock, jumping back, never reaches again.
+  const ros::WallTime now = ros::WallTime::now();
+  if (now >= next_diagnostics_) {
+    diagnostics_.force_update();
+    next_diagnostics_ = now + ros::WallDuration(1.0);
+  }
 }
 
 MapPublisher::SentVersion MapPublisher::currentVersion() const {

@@ -49,7 +49,9 @@ void MapperNodeletBase::startDiagnostics(const std::string& task_name,
     fill(status);
   });
   diagnostics_timer_ = getNodeHandle().createTimer(
-      ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+      // force_update: Updater::update() waits until ROS time passes its next due time, which a
+      // looped bag's clock, jumping back, never reaches again (roscpp resets this timer itself).
+      ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 }
 
 void MapperNodeletBase::noteReceivedStamp(const std_msgs::Header& header) {

@@ -136,6 +136,7 @@ class MapPublisher {
   // then must still get the current map, not a stale latched one.
   ros::WallTimer timer_;
   diagnostic_updater::Updater diagnostics_;
+  ros::WallTime next_diagnostics_;  // diagnostics are published once per wall-clock second
 };
 
 }  // namespace occupancy_fusion
