@@ -178,8 +178,20 @@ class FrameUpdates {
   std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
     const auto [it, inserted] =
         slots_.try_emplace(voxelKey(index, origin), static_cast<std::uint32_t>(entries_.size()));
-    if (inserted) entries_.push_back({index, 0.0f, 0.0f});
+    if (inserted) {
+      entries_.push_back({index, 0.0f, 0.0f});
+      occlusions_.push_back(kNotComputed);
+    }
     return it->second;
+  }
+  // Eq. 1's local occlusion of the entry's voxel, computed on its first request: it depends only
+  // on the voxel, the sensor's voxel and the map before the frame, and rays that are not
+  // neighbours (bundle_rays) reach the same voxel many times past the previous-ray cache.
+  template <typename Compute>
+  float occlusion(std::uint32_t entry, Compute&& compute) {
+    float& value = occlusions_[entry];
+    if (std::isnan(value)) value = static_cast<float>(compute());
+    return value;
   }
   // Reduction to one update per voxel: the largest P(I_v) (a hit wins over a
   // miss, as in OctoMap) and the largest visibility (see reduce()).
@@ -196,8 +208,10 @@ class FrameUpdates {
   std::vector<StereoVoxelUpdate>& entries() { return entries_; }
 
  private:
+  static constexpr float kNotComputed = std::numeric_limits<float>::quiet_NaN();
   SpatialKeyMap<std::uint32_t> slots_;
   std::vector<StereoVoxelUpdate> entries_;
+  std::vector<float> occlusions_;  // per entry; kNotComputed until requested
 };
 
 // Read access to the map for one thread and frame: blocks are copied once
@@ -327,10 +341,14 @@ class RayCaster {
       current_.push_back(previous_[j]);
     } else {
       const std::uint32_t entry = updates_->findOrInsert(index, frame_.origin_voxel);
-      const float occlusion = need_occlusion
-                                  ? static_cast<float>(localOcclusion(index, frame_.origin_voxel,
-                                                                      frame_.neighbours, snapshot_))
-                                  : 0.0f;
+      const float occlusion =
+          need_occlusion
+              ? updates_->occlusion(entry,
+                                    [&] {
+                                      return localOcclusion(index, frame_.origin_voxel,
+                                                            frame_.neighbours, snapshot_);
+                                    })
+              : 0.0f;
       current_.push_back({index, entry, occlusion});
     }
     return current_.back();
