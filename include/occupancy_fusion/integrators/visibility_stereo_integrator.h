@@ -83,9 +83,9 @@ struct VisibilityStereoConfig {
   //    the nearest point's, since Phi((s - r) / sigma_r) grows as r falls. Eq. 8 puts the full
   //    hit ~2.3 sigma past a point, so the bundle's hits span from the nearest point's stop voxel
   //    to the farthest's, and the farthest ray keeps the deepest of them. The nearest point alone
-  //    lost those (simulated standing view: 119 occupied surface voxels of 165 instead of >= 130);
-  //    a mean depth would put the hit where no point is. Left out: the points in between, whose
-  //    rays differ only by their lateral offset inside the voxel.
+  //    lost those (rostest sim_disparity_standing: 119 occupied voxels where it asks for >= 130);
+  //    a mean depth would put the hit where no point is. Left out: the points in between (their
+  //    depths lie between the two) and the lateral spread of the rays inside the voxel.
   //  - kOctomap: one ray to the end voxel's centre, as liboctomap's discretize = true does (the
   //    depth of the point does not enter OctoMap's update), so the two compare directly.
   // Points beyond max_range are bundled like the others.
