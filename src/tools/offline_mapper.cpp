@@ -14,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include <ros/time.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "occupancy_fusion/tools/command_line.h"
@@ -22,6 +21,7 @@
 #include "occupancy_fusion/tools/map_outputs.h"
 #include "occupancy_fusion/tools/recording_mapper.h"
 #include "occupancy_fusion/tools/rosbag_reader.h"
+#include "occupancy_fusion/tools/tool_main.h"
 #include "occupancy_fusion/tools/voxel_picture.h"
 #include "occupancy_fusion/tools/yaml_parameter_source.h"
 
@@ -402,31 +402,10 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-bool wantsHelp(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") return true;
-  }
-  return false;
-}
-
 }  // namespace
 }  // namespace occupancy_fusion
 
 int main(int argc, char** argv) {
-  using namespace occupancy_fusion;
-  if (wantsHelp(argc, argv)) {
-    std::cout << kUsage;
-    return 0;
-  }
-  ros::Time::init();  // rosbag and tf2 use ros::Time; no master is contacted
-  try {
-    return run(argc, argv);
-  } catch (const UsageError& error) {
-    std::cerr << "offline_mapper: error: " << error.what()
-              << "\n(offline_mapper --help for usage)\n";
-    return kUsageExitCode;
-  } catch (const std::exception& error) {
-    std::cerr << "offline_mapper: failed: " << error.what() << "\n";
-    return 1;
-  }
+  return occupancy_fusion::runTool("offline_mapper", occupancy_fusion::kUsage, argc, argv,
+                                   occupancy_fusion::run);
 }

@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include <ros/time.h>
 #include <rosbag/exceptions.h>
 
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/simulated_recording.h"
+#include "occupancy_fusion/tools/tool_main.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -97,22 +97,6 @@ int run(int argc, char** argv) {
 }  // namespace occupancy_fusion
 
 int main(int argc, char** argv) {
-  using namespace occupancy_fusion;
-  for (int i = 1; i < argc; ++i) {
-    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
-      std::cout << kUsage;
-      return 0;
-    }
-  }
-  ros::Time::init();  // rosbag uses ros::Time; no master is contacted
-  try {
-    return run(argc, argv);
-  } catch (const UsageError& error) {
-    std::cerr << "simulate_recording: error: " << error.what()
-              << "\n(simulate_recording --help for usage)\n";
-    return kUsageExitCode;
-  } catch (const std::exception& error) {
-    std::cerr << "simulate_recording: failed: " << error.what() << "\n";
-    return 1;
-  }
+  return occupancy_fusion::runTool("simulate_recording", occupancy_fusion::kUsage, argc, argv,
+                                   occupancy_fusion::run);
 }
