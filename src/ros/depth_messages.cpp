@@ -5,17 +5,9 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#include "occupancy_fusion/ros/image_bytes.h"
+
 namespace occupancy_fusion {
-namespace {
-
-bool hostIsBigEndian() {
-  const std::uint16_t probe = 1;
-  std::uint8_t first_byte = 0;
-  std::memcpy(&first_byte, &probe, 1);
-  return first_byte == 0;
-}
-
-}  // namespace
 
 DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>* storage) {
   namespace enc = sensor_msgs::image_encodings;
@@ -26,16 +18,15 @@ DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>
         DepthImageRejected::Reason::kEncoding,
         "encoding '" + image.encoding + "' is not a depth encoding (16UC1 in mm or 32FC1 in m)");
   }
-  if (static_cast<bool>(image.is_bigendian) != hostIsBigEndian()) {
+  if (needsByteSwap(image)) {
     throw DepthImageRejected(DepthImageRejected::Reason::kEncoding,
                              "encoding '" + image.encoding + "' with foreign byte order");
   }
-  if (image.width == 0 || image.height == 0) {
+  if (isEmptyImage(image)) {
     throw DepthImageRejected(DepthImageRejected::Reason::kEncoding, "the image is empty");
   }
   const std::size_t pixel_bytes = millimetres ? 2 : 4;
-  if (image.step < image.width * pixel_bytes ||
-      image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+  if (!rowsFitData(image, pixel_bytes)) {
     throw DepthImageRejected(DepthImageRejected::Reason::kEncoding,
                              "encoding '" + image.encoding + "': step or data size too small");
   }

@@ -8,35 +8,20 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#include "occupancy_fusion/ros/image_bytes.h"
+
 namespace occupancy_fusion {
 namespace {
-
-bool hostIsBigEndian() {
-  const std::uint16_t probe = 1;
-  std::uint8_t first_byte = 0;
-  std::memcpy(&first_byte, &probe, 1);
-  return first_byte == 0;
-}
-
-float readFloat(const std::uint8_t* bytes, bool swap) {
-  std::uint8_t ordered[sizeof(float)];
-  std::memcpy(ordered, bytes, sizeof(float));
-  if (swap) std::reverse(ordered, ordered + sizeof(float));
-  float value = 0.0f;
-  std::memcpy(&value, ordered, sizeof(float));
-  return value;
-}
 
 void requireConsistentLayout(const sensor_msgs::Image& image) {
   if (image.encoding != sensor_msgs::image_encodings::TYPE_32FC1) {
     throw std::invalid_argument("disparity image encoding must be 32FC1, got '" + image.encoding +
                                 "'");
   }
-  if (image.width == 0 || image.height == 0) {
+  if (isEmptyImage(image)) {
     throw std::invalid_argument("disparity image is empty");
   }
-  if (image.step < image.width * sizeof(float) ||
-      image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+  if (!rowsFitData(image, sizeof(float))) {
     throw std::invalid_argument("disparity image of " + std::to_string(image.width) + "x" +
                                 std::to_string(image.height) + " has step " +
                                 std::to_string(image.step) + " and " +
@@ -55,14 +40,14 @@ bool insideWindow(const sensor_msgs::RegionOfInterest& window, std::uint32_t u, 
 std::vector<float> validDisparities(const stereo_msgs::DisparityImage& message) {
   const sensor_msgs::Image& image = message.image;
   requireConsistentLayout(image);
-  const bool swap = (image.is_bigendian != 0) != hostIsBigEndian();
+  const bool swap = needsByteSwap(image);
   const bool has_upper_bound = message.max_disparity > message.min_disparity;
   constexpr float kInvalid = std::numeric_limits<float>::quiet_NaN();
   std::vector<float> disparity(static_cast<std::size_t>(image.width) * image.height);
   for (std::uint32_t v = 0; v < image.height; ++v) {
     const std::uint8_t* row = image.data.data() + static_cast<std::size_t>(v) * image.step;
     for (std::uint32_t u = 0; u < image.width; ++u) {
-      const float d = readFloat(row + u * sizeof(float), swap);
+      const float d = readValue<float>(row + u * sizeof(float), swap);
       const bool valid = std::isfinite(d) && d >= message.min_disparity &&
                          (!has_upper_bound || d <= message.max_disparity) &&
                          insideWindow(message.valid_window, u, v);
@@ -106,7 +91,7 @@ stereo_msgs::DisparityImage disparityImageMessage(const std::vector<float>& disp
   message.image.width = static_cast<std::uint32_t>(width);
   message.image.height = static_cast<std::uint32_t>(height);
   message.image.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
-  message.image.is_bigendian = hostIsBigEndian() ? 1 : 0;
+  message.image.is_bigendian = hostByteOrderFlag();
   message.image.step = static_cast<std::uint32_t>(width * sizeof(float));
   message.image.data.resize(disparity.size() * sizeof(float));
   std::vector<float> written(disparity);

@@ -9,6 +9,8 @@
 
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "occupancy_fusion/ros/image_bytes.h"
+
 namespace occupancy_fusion {
 namespace {
 
@@ -75,30 +77,11 @@ sensor_msgs::PointCloud2 cloudFromPoints(const std::vector<Eigen::Vector3f>& poi
 namespace occupancy_fusion {
 namespace {
 
-bool hostIsBigEndian() {
-  const std::uint16_t probe = 1;
-  std::uint8_t first = 0;
-  std::memcpy(&first, &probe, 1);
-  return first == 0;
-}
-
-// Reads value `index` of `row` as T, swapping bytes when the message's order is not the host's.
-template <typename T>
-T readValue(const std::uint8_t* row, int index, bool swap) {
-  std::uint8_t bytes[sizeof(T)];
-  std::memcpy(bytes, row + static_cast<std::size_t>(index) * sizeof(T), sizeof(T));
-  if (swap) std::reverse(bytes, bytes + sizeof(T));
-  T value;
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
 void checkImageSize(const sensor_msgs::Image& image, std::size_t bytes_per_pixel) {
-  if (image.width == 0 || image.height == 0) {
+  if (isEmptyImage(image)) {
     throw std::invalid_argument("image '" + image.header.frame_id + "' is empty");
   }
-  if (image.step < image.width * bytes_per_pixel ||
-      image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+  if (!rowsFitData(image, bytes_per_pixel)) {
     throw std::invalid_argument("image '" + image.header.frame_id + "' has " +
                                 std::to_string(image.data.size()) + " bytes, too few for " +
                                 std::to_string(image.width) + " x " + std::to_string(image.height) +
@@ -109,13 +92,13 @@ void checkImageSize(const sensor_msgs::Image& image, std::size_t bytes_per_pixel
 template <typename T>
 std::vector<float> convertImage(const sensor_msgs::Image& image, float scale) {
   checkImageSize(image, sizeof(T));
-  const bool swap = (image.is_bigendian != 0) != hostIsBigEndian();
+  const bool swap = needsByteSwap(image);
   std::vector<float> values(static_cast<std::size_t>(image.width) * image.height);
   for (std::uint32_t v = 0; v < image.height; ++v) {
     const std::uint8_t* row = image.data.data() + static_cast<std::size_t>(v) * image.step;
     for (std::uint32_t u = 0; u < image.width; ++u) {
       values[static_cast<std::size_t>(v) * image.width + u] =
-          scale * static_cast<float>(readValue<T>(row, static_cast<int>(u), swap));
+          scale * static_cast<float>(readValue<T>(row + u * sizeof(T), swap));
     }
   }
   return values;
@@ -224,7 +207,7 @@ sensor_msgs::Image depthImageMessage(const std::vector<float>& depth, int width,
   image.header.stamp = stamp;
   image.width = static_cast<std::uint32_t>(width);
   image.height = static_cast<std::uint32_t>(height);
-  image.is_bigendian = hostIsBigEndian() ? 1 : 0;
+  image.is_bigendian = hostByteOrderFlag();
   const std::size_t bytes = millimetres ? sizeof(std::uint16_t) : sizeof(float);
   image.encoding = millimetres ? "16UC1" : "32FC1";
   image.step = static_cast<std::uint32_t>(width * bytes);
