@@ -32,6 +32,8 @@ void describe(Codec* codec, sensor_msgs::Image* image, sensor_msgs::CameraInfo* 
   for (double& k : info->K) codec->field(&k);
 }
 
+}  // namespace
+
 void writeSeeds() {
   namespace enc = sensor_msgs::image_encodings;
   const struct {
@@ -53,27 +55,18 @@ void writeSeeds() {
     info.width = image.width;
     info.height = image.height;
     info.K = {5.0, 0.0, 1.5, 0.0, 5.0, 1.0, 0.0, 0.0, 1.0};
-    FuzzWriter writer;
-    describe(&writer, &image, &info);
-    writeSeed(kind.name, writer.data());
+    writeSeed(kind.name, encodeFields(describe<FuzzWriter>, &image, &info));
   }
 }
 
-}  // namespace
 }  // namespace fuzz
 }  // namespace occupancy_fusion
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  occupancy_fusion::fuzz::writeSeeds();
-  return 0;
-}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;
   sensor_msgs::Image image;
   sensor_msgs::CameraInfo info;
-  fuzz::FuzzReader reader(data, size);
-  fuzz::describe(&reader, &image, &info);
+  fuzz::decodeFields(fuzz::describe<fuzz::FuzzReader>, data, size, &image, &info);
   try {
     std::vector<float> storage;
     const DepthImageView view = depthInMetres(image, &storage);

@@ -46,6 +46,8 @@ void describe(Codec* codec, stereo_msgs::DisparityImage* message, sensor_msgs::C
   codec->field(resolution);
 }
 
+}  // namespace
+
 void writeSeeds() {
   StereoCamera camera;
   camera.fx = camera.fy = 10.0;
@@ -58,11 +60,12 @@ void writeSeeds() {
     stereo_msgs::DisparityImage message = disparityImageMessage(disparity, 4, 3, camera);
     sensor_msgs::CameraInfo info = leftCameraInfoMessage(camera, 4, 3);
     DisparityConversionConfig config;
-    FuzzWriter writer;
-    describe(&writer, &message, &info, &config, &resolution);
-    writeSeed("seed_resolution_" + std::to_string(resolution), writer.data());
+    writeSeed("seed_resolution_" + std::to_string(resolution),
+              encodeFields(describe<FuzzWriter>, &message, &info, &config, &resolution));
   }
 }
+
+namespace {
 
 InputResolution resolutionOf(std::uint8_t code) {
   return code == 4   ? InputResolution::kQuarter
@@ -74,19 +77,14 @@ InputResolution resolutionOf(std::uint8_t code) {
 }  // namespace fuzz
 }  // namespace occupancy_fusion
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  occupancy_fusion::fuzz::writeSeeds();
-  return 0;
-}
-
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;
   stereo_msgs::DisparityImage message;
   sensor_msgs::CameraInfo info;
   DisparityConversionConfig config;
   std::uint8_t resolution = 1;
-  fuzz::FuzzReader reader(data, size);
-  fuzz::describe(&reader, &message, &info, &config, &resolution);
+  fuzz::decodeFields(fuzz::describe<fuzz::FuzzReader>, data, size, &message, &info, &config,
+                     &resolution);
   config.input_resolution = fuzz::resolutionOf(resolution);
   try {
     const std::vector<float> disparity = validDisparities(message);

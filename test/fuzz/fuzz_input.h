@@ -81,6 +81,24 @@ class FuzzWriter {
   std::vector<std::uint8_t> out_;
 };
 
+// The input bytes that give `fields` (for seeds): `describe` is the harness's description of its
+// message, instantiated for the writer (describe<FuzzWriter>).
+template <typename... Fields>
+std::vector<std::uint8_t> encodeFields(void (*describe)(FuzzWriter*, Fields*...),
+                                       Fields*... fields) {
+  FuzzWriter writer;
+  describe(&writer, fields...);
+  return writer.data();
+}
+
+// Fills `fields` from the fuzzer's input in the same layout (describe<FuzzReader>).
+template <typename... Fields>
+void decodeFields(void (*describe)(FuzzReader*, Fields*...), const std::uint8_t* data,
+                  std::size_t size, Fields*... fields) {
+  FuzzReader reader(data, size);
+  describe(&reader, fields...);
+}
+
 // Writes `encoded` as <$FUZZ_SEED_DIR>/<name> when that variable is set (scripts/fuzz.sh sets it
 // to the run's corpus folder), so generated seeds join the checked-in ones.
 inline void writeSeed(const std::string& name, const std::vector<std::uint8_t>& encoded) {
@@ -90,6 +108,10 @@ inline void writeSeed(const std::string& name, const std::vector<std::uint8_t>& 
       .write(reinterpret_cast<const char*>(encoded.data()),
              static_cast<std::streamsize>(encoded.size()));
 }
+
+// Writes the harness's generated seeds (with writeSeed). Each harness that generates seeds defines
+// it; harness_init.cpp calls it from libFuzzer's LLVMFuzzerInitialize, before the first input.
+void writeSeeds();
 
 }  // namespace fuzz
 }  // namespace occupancy_fusion

@@ -30,6 +30,8 @@ void describe(Codec* codec, sensor_msgs::LaserScan* message, std::uint8_t* above
   for (float& range : message->ranges) codec->field(&range);
 }
 
+}  // namespace
+
 void writeSeeds() {
   for (bool backwards : {false, true}) {
     sensor_msgs::LaserScan message;
@@ -40,27 +42,20 @@ void writeSeeds() {
     message.range_max = 10.0f;
     message.ranges = {1.0f, 2.0f, INFINITY, -INFINITY, NAN, 0.05f, 12.0f, 10.0f, 0.1f};
     std::uint8_t no_return = backwards ? 1 : 0;
-    FuzzWriter writer;
-    describe(&writer, &message, &no_return);
-    writeSeed(backwards ? "seed_backwards" : "seed_forwards", writer.data());
+    writeSeed(backwards ? "seed_backwards" : "seed_forwards",
+              encodeFields(describe<FuzzWriter>, &message, &no_return));
   }
 }
 
-}  // namespace
 }  // namespace fuzz
 }  // namespace occupancy_fusion
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  occupancy_fusion::fuzz::writeSeeds();
-  return 0;
-}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;
   sensor_msgs::LaserScan message;
   std::uint8_t above_max_is_no_return = 0;
-  fuzz::FuzzReader reader(data, size);
-  fuzz::describe(&reader, &message, &above_max_is_no_return);
+  fuzz::decodeFields(fuzz::describe<fuzz::FuzzReader>, data, size, &message,
+                     &above_max_is_no_return);
   try {
     const LaserScan scan = checkedLaserScan(message);
     scan.validate();

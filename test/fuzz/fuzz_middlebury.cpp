@@ -9,10 +9,10 @@
 #include "fuzz_input.h"
 #include "occupancy_fusion/sensors/middlebury_folder.h"
 
-namespace {
+namespace occupancy_fusion {
+namespace fuzz {
 
 void writeSeeds() {
-  using occupancy_fusion::fuzz::writeSeed;
   // 3 x 2 little-endian Pf with one unknown (inf) value.
   std::string pfm = "Pf\n3 2\n-1.0\n";
   const float values[6] = {1.5f, 2.0f, INFINITY, 4.25f, 0.0f, 8.0f};
@@ -28,12 +28,8 @@ void writeSeeds() {
   writeSeed("seed_calib", seed);
 }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  writeSeeds();
-  return 0;
-}
+}  // namespace fuzz
+}  // namespace occupancy_fusion
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;

@@ -17,6 +17,8 @@ namespace {
 // The harness's bound on the voxels a file may cover (the default allows 2^28: too slow here).
 constexpr std::size_t kHarnessMaxVoxels = std::size_t{1} << 16;
 
+}  // namespace
+
 void writeSeeds() {
   VoxelMapConfig config;
   config.resolution = 0.1;
@@ -44,14 +46,8 @@ void writeSeeds() {
   }
 }
 
-}  // namespace
 }  // namespace fuzz
 }  // namespace occupancy_fusion
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  occupancy_fusion::fuzz::writeSeeds();
-  return 0;
-}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;

@@ -32,13 +32,13 @@ void describe(Codec* codec, sensor_msgs::PointCloud2* cloud) {
   codec->bytes(&cloud->data);
 }
 
+}  // namespace
+
 void writeSeeds() {
   sensor_msgs::PointCloud2 cloud;
   resizeXyzCloud(3, &cloud);
   for (std::size_t i = 0; i < cloud.data.size(); ++i) cloud.data[i] = static_cast<std::uint8_t>(i);
-  FuzzWriter writer;
-  describe(&writer, &cloud);
-  writeSeed("seed_xyz32", writer.data());
+  writeSeed("seed_xyz32", encodeFields(describe<FuzzWriter>, &cloud));
 
   // An organised 2 x 2 cloud of FLOAT64 x, y, z after an intensity, rows padded.
   sensor_msgs::PointCloud2 padded;
@@ -56,25 +56,16 @@ void writeSeeds() {
     padded.fields.push_back(field);
   }
   padded.data.assign(static_cast<std::size_t>(padded.row_step) * padded.height, 0x40);
-  FuzzWriter padded_writer;
-  describe(&padded_writer, &padded);
-  writeSeed("seed_xyz64_padded", padded_writer.data());
+  writeSeed("seed_xyz64_padded", encodeFields(describe<FuzzWriter>, &padded));
 }
 
-}  // namespace
 }  // namespace fuzz
 }  // namespace occupancy_fusion
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  occupancy_fusion::fuzz::writeSeeds();
-  return 0;
-}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;
   sensor_msgs::PointCloud2 cloud;
-  fuzz::FuzzReader reader(data, size);
-  fuzz::describe(&reader, &cloud);
+  fuzz::decodeFields(fuzz::describe<fuzz::FuzzReader>, data, size, &cloud);
   Eigen::Isometry3d target_T_cloud = Eigen::Isometry3d::Identity();
   target_T_cloud.translation() = Eigen::Vector3d(1.0, -2.0, 0.5);
   try {

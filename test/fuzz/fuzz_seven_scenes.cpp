@@ -9,10 +9,10 @@
 #include "fuzz_input.h"
 #include "occupancy_fusion/sensors/seven_scenes_folder.h"
 
-namespace {
+namespace occupancy_fusion {
+namespace fuzz {
 
 void writeSeeds() {
-  using occupancy_fusion::fuzz::writeSeed;
   const std::string intrinsics = "585 0 320\n0 585 240\n0 0 1\n";
   const std::string pose =
       " 9.9935108e-001 -1.3861383e-002 -3.3291239e-002 -2.1566930e-001\n"
@@ -23,12 +23,8 @@ void writeSeeds() {
   writeSeed("seed_pose", std::vector<std::uint8_t>(pose.begin(), pose.end()));
 }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  writeSeeds();
-  return 0;
-}
+}  // namespace fuzz
+}  // namespace occupancy_fusion
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace occupancy_fusion;
