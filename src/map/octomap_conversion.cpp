@@ -230,20 +230,31 @@ void applyModel(const OccupancyModel& model, octomap::OcTree* tree) {
 }
 
 std::unique_ptr<octomap::OcTree> toOcTree(const VoxelMap& map, std::size_t* skipped_voxels) {
-  auto tree = std::make_unique<octomap::OcTree>(map.resolution());
-  applyModel(map.model(), tree.get());
+  return toOcTree(map.copyBlocks(), map.resolution(), map.model(), skipped_voxels);
+}
+
+std::unique_ptr<octomap::OcTree> toOcTree(const std::vector<VoxelMap::BlockCopy>& blocks,
+                                          double resolution, const OccupancyModel& model,
+                                          std::size_t* skipped_voxels) {
+  auto tree = std::make_unique<octomap::OcTree>(resolution);
+  applyModel(model, tree.get());
   std::size_t skipped = 0;
-  map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
-    if (!isOctomapRepresentable(index)) {
-      ++skipped;
-      return;
+  for (const auto& [block_index, block] : blocks) {
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      const float log_odds = block.log_odds[linear];
+      if (!VoxelBlock::isKnown(log_odds)) continue;
+      const VoxelIndex index = VoxelMap::voxelIndex(block_index, linear);
+      if (!isOctomapRepresentable(index)) {
+        ++skipped;
+        continue;
+      }
+      // The key of the voxel's centre, computed exactly: floor(((i + 0.5) r) / r) + 32768.
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>(index.x() + kOctomapKeyOffset),
+                                   static_cast<octomap::key_type>(index.y() + kOctomapKeyOffset),
+                                   static_cast<octomap::key_type>(index.z() + kOctomapKeyOffset));
+      tree->setNodeValue(key, log_odds, /*lazy_eval=*/true);
     }
-    // The key of the voxel's centre, computed exactly: floor(((i + 0.5) r) / r) + 32768.
-    const octomap::OcTreeKey key(static_cast<octomap::key_type>(index.x() + kOctomapKeyOffset),
-                                 static_cast<octomap::key_type>(index.y() + kOctomapKeyOffset),
-                                 static_cast<octomap::key_type>(index.z() + kOctomapKeyOffset));
-    tree->setNodeValue(key, log_odds, /*lazy_eval=*/true);
-  });
+  }
   tree->updateInnerOccupancy();
   tree->prune();
   if (skipped_voxels != nullptr) *skipped_voxels = skipped;

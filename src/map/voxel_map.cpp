@@ -292,6 +292,14 @@ void VoxelMap::forEachBlock(
   for (const auto& [key, block] : blocks_) fn(unpackKey3(key), *block);
 }
 
+std::vector<VoxelMap::BlockCopy> VoxelMap::copyBlocks() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::vector<BlockCopy> copies;
+  copies.reserve(blocks_.size());
+  for (const auto& [key, block] : blocks_) copies.emplace_back(unpackKey3(key), *block);
+  return copies;
+}
+
 bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   const VoxelBlock* found = findBlock(block);

@@ -288,11 +288,14 @@ void MapPublisher::publishBinary(const ros::Time& stamp) {
   // The message holds the whole tree, so this cost necessarily follows the map's size.
   const auto start = Clock::now();
   const SentVersion version = currentVersion();
-  std::unique_ptr<octomap::OcTree> tree;
+  std::vector<VoxelMap::BlockCopy> blocks;
   {
-    const MapCallTimer timer(&lock_statistics_, "octomap_binary conversion");
-    tree = toOcTree(map_->voxels());
+    const MapCallTimer timer(&lock_statistics_, "octomap_binary block copy");
+    blocks = map_->voxels().copyBlocks();  // the tree is built without the map's lock
   }
+  const VoxelMap& voxels = map_->voxels();
+  const std::unique_ptr<octomap::OcTree> tree =
+      toOcTree(blocks, voxels.resolution(), voxels.model());
   std::stringstream stream;
   tree->writeBinaryData(stream);
   const std::string bytes = stream.str();
@@ -381,11 +384,13 @@ void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::
   // One read of the voxels for both OctoMap files, and the 2D grid, before any file is touched:
   // a map that cannot be saved (empty) leaves the previous files of this prefix as they were.
   std::size_t skipped_voxels = 0;
-  std::unique_ptr<octomap::OcTree> tree;
+  std::vector<VoxelMap::BlockCopy> blocks;
   {
-    const MapCallTimer timer(lock_statistics, "~save_map octree conversion");
-    tree = toOcTree(map.voxels(), &skipped_voxels);
+    const MapCallTimer timer(lock_statistics, "~save_map block copy");
+    blocks = map.voxels().copyBlocks();  // the tree is built without the map's lock
   }
+  const std::unique_ptr<octomap::OcTree> tree =
+      toOcTree(blocks, map.voxels().resolution(), map.voxels().model(), &skipped_voxels);
   FusedGridView view(grid);
   OccupancyRaster raster;
   {

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <octomap/OcTree.h>
 
@@ -21,7 +22,12 @@ bool isOctomapRepresentable(const VoxelIndex& index);
 // clamps to the tree's thresholds, set equal to the map's), then inner nodes are updated and equal
 // siblings pruned. The tree's hit/miss/clamping/occupancy parameters are the map's model.
 // Voxels outside the key range are skipped; their number goes to *skipped_voxels if given.
+// The map is read through VoxelMap::copyBlocks, so its lock is held only for the copy.
 std::unique_ptr<octomap::OcTree> toOcTree(const VoxelMap& map,
+                                          std::size_t* skipped_voxels = nullptr);
+// The same from blocks already copied (callers that time or reuse the copy).
+std::unique_ptr<octomap::OcTree> toOcTree(const std::vector<VoxelMap::BlockCopy>& blocks,
+                                          double resolution, const OccupancyModel& model,
                                           std::size_t* skipped_voxels = nullptr);
 
 // Writes every leaf of the tree into the map (setLogOdds semantics: values as stored, existing

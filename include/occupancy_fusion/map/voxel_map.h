@@ -159,6 +159,10 @@ class VoxelMap {
   void forEachBlock(const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const;
   // Copies one block; false if it is not allocated.
   bool copyBlock(const BlockIndex& block, VoxelBlock* out) const;
+  // Every block, copied under one shared lock: a consistent snapshot for long work (converting
+  // the whole map to a file or a message) that must not keep writers waiting while it runs.
+  using BlockCopy = std::pair<BlockIndex, VoxelBlock>;
+  std::vector<BlockCopy> copyBlocks() const;
 
   // Change log for incremental consumers. Start with version 0 (a full rebuild).
   MapChanges changesSince(std::uint64_t version) const;

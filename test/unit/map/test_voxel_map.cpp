@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <map>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -145,6 +146,30 @@ TEST(VoxelMap, IterationSplitsOccupiedAndFree) {
   });
   EXPECT_EQ(seen_occupied, occupied);
   EXPECT_EQ(seen_free, free);
+}
+
+TEST(VoxelMap, CopyBlocksIsASnapshotUnaffectedByLaterWrites) {
+  VoxelMap map(defaultConfig());
+  std::map<std::tuple<int, int, int>, float> written;
+  for (int i = 0; i < 40; ++i) {
+    const VoxelIndex index(i * 5 - 90, (i * 7) % 23 - 11, 3 - i);
+    const float delta = i % 2 ? 0.85f : -0.4f;
+    map.updateVoxel(index, delta);
+    written[{index.x(), index.y(), index.z()}] = delta;
+  }
+  const std::vector<VoxelMap::BlockCopy> copies = map.copyBlocks();
+  map.updateVoxel(VoxelIndex(-90, -11, 3), 0.85f);  // after the copy: not in it
+  map.updateVoxel(VoxelIndex(500, 500, 500), 0.85f);
+  EXPECT_EQ(copies.size() + 1, map.blockCount());
+  std::map<std::tuple<int, int, int>, float> copied;
+  for (const auto& [block_index, block] : copies) {
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      if (!VoxelBlock::isKnown(block.log_odds[linear])) continue;
+      const VoxelIndex index = VoxelMap::voxelIndex(block_index, linear);
+      copied[{index.x(), index.y(), index.z()}] = block.log_odds[linear];
+    }
+  }
+  EXPECT_EQ(copied, written);
 }
 
 TEST(VoxelMap, BoxQueryCountsAndClearBox) {
