@@ -3,13 +3,16 @@
 // point comes from the left camera's camera_info. With ~publish_map it also publishes the map, for
 // a mapper that runs alone in its own process.
 //
-// camera_info is cached (the latest message), not time-synchronised with the disparity images:
-// a rectified pair's intrinsics do not change while it runs, drivers publish camera_info at their
-// own rate (or latched, once), and an exact-time synchroniser would drop every disparity image
-// whose camera_info was lost or stamped differently. Only the principal point and fy are taken
-// from it; f and T come with each disparity image. A camera_info that does not fit the image
-// (another size) is detected per frame, and the frame dropped.
+// camera_info is cached (the last few messages), not time-synchronised with the disparity
+// images: a rectified pair's intrinsics do not change while it runs, drivers publish camera_info
+// at their own rate (or latched, once), and an exact-time synchroniser would drop every disparity
+// image whose camera_info was lost or stamped differently. A disparity image takes the cached
+// camera_info of its own stamp and frame if there is one (cameras of different sizes sharing a
+// topic, or a message on the other topic arriving late), else the latest. Only the principal point
+// and fy are taken from it; f and T come with each disparity image. A camera_info that does not fit
+// the image (another size) is detected per frame, and the frame dropped.
 #include <atomic>
+#include <deque>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -52,8 +55,10 @@ class DisparityMapper : public MapperNodeletBase {
   // camera_info needs no lock.
   void subscribe() {
     camera_info_subscriber_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
-        "camera_info", 1,
-        [this](const sensor_msgs::CameraInfo::ConstPtr& info) { camera_info_ = info; });
+        "camera_info", 1, [this](const sensor_msgs::CameraInfo::ConstPtr& info) {
+          camera_infos_.push_back(info);
+          if (camera_infos_.size() > kCameraInfosKept) camera_infos_.pop_front();
+        });
     disparity_subscriber_.subscribe(getNodeHandle(), "disparity", queueSize());
     tf_filter_ = makeMapFrameFilter<Disparity>(
         disparity_subscriber_, "disparity image",
@@ -62,8 +67,20 @@ class DisparityMapper : public MapperNodeletBase {
 
   // The header of a DisparityImage is the left optical frame's (stereo_image_proc copies the left
   // image's header into both the message and its image). Whether the image was integrated.
+  // See the file comment: same stamp and frame, else the latest (nullptr: none received yet).
+  const sensor_msgs::CameraInfo* cameraInfoFor(const stereo_msgs::DisparityImage& message) const {
+    for (auto it = camera_infos_.rbegin(); it != camera_infos_.rend(); ++it) {
+      const std_msgs::Header& header = (*it)->header;
+      if (header.stamp == message.header.stamp && header.frame_id == message.header.frame_id) {
+        return it->get();
+      }
+    }
+    return camera_infos_.empty() ? nullptr : camera_infos_.back().get();
+  }
+
   bool onDisparity(const Disparity& message) {
-    if (!camera_info_) {
+    const sensor_msgs::CameraInfo* camera_info = cameraInfoFor(message);
+    if (camera_info == nullptr) {
       countDropped(kNoCameraInfo);
       NODELET_WARN_THROTTLE(5.0, "no camera_info received yet on '%s': disparity images dropped",
                             camera_info_subscriber_.getTopic().c_str());
@@ -73,7 +90,7 @@ class DisparityMapper : public MapperNodeletBase {
     StereoCamera camera;
     try {
       disparity = validDisparities(message);
-      camera = stereoCameraOf(message, *camera_info_);
+      camera = stereoCameraOf(message, *camera_info);
     } catch (const std::invalid_argument& error) {
       countDropped(kInvalid);
       NODELET_ERROR_THROTTLE(5.0, "disparity image dropped: %s", error.what());
@@ -94,7 +111,7 @@ class DisparityMapper : public MapperNodeletBase {
 
   void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
     const FrameStatistics& frames = frameStatistics();
-    const bool starved = !camera_info_ && frames.dropped(kNoCameraInfo) > 0;
+    const bool starved = camera_infos_.empty() && frames.dropped(kNoCameraInfo) > 0;
     if (starved) {
       status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for camera_info");
     } else {
@@ -115,7 +132,8 @@ class DisparityMapper : public MapperNodeletBase {
 
   std::unique_ptr<VisibilityStereoIntegrator> integrator_;
   ros::Subscriber camera_info_subscriber_;
-  sensor_msgs::CameraInfo::ConstPtr camera_info_;
+  static constexpr std::size_t kCameraInfosKept = 8;
+  std::deque<sensor_msgs::CameraInfo::ConstPtr> camera_infos_;  // oldest first
   message_filters::Subscriber<Disparity> disparity_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<Disparity>> tf_filter_;
 

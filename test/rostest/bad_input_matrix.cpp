@@ -324,6 +324,14 @@ TEST_F(BadInputMatrix, DisparityImages) {
   send(disparity_, disparity(nextStamp(1.0), kBaseline));
   expectCount(kDisparity, "frames integrated", 2);
   EXPECT_NE(mapState().first, before.first);
+  // Two cameras of different sizes on one camera_info topic: a disparity image takes the
+  // camera_info of its own stamp, though another camera's arrived after it.
+  const ros::Time own = nextStamp(1.2);
+  send(disparity_info_, cameraInfo("stereo_optical", own));
+  send(disparity_info_, cameraInfo("stereo_optical", nextStamp(1.2), 32, 24));
+  send(disparity_, disparity(own, kBaseline));
+  expectCount(kDisparity, "frames integrated", 3);
+  expectCount(kDisparity, dropped("invalid"), 4);
 }
 
 TEST_F(BadInputMatrix, LaserScans) {
