@@ -95,7 +95,9 @@ class RecordingMapper : public FrameConsumer {
   const RecordingStatistics& statistics() const { return statistics_; }
 
  private:
-  // The sensor-to-map transform, or nullopt after counting the frame as skipped.
+  // The sensor-to-map transform, or nullopt after counting the frame as skipped (also a frame
+  // with the stamp of the last one taken from the same source and sensor frame: a duplicate,
+  // whose evidence would be counted twice, as the nodelets drop it).
   std::optional<Eigen::Isometry3d> poseOf(const FrameHeader& header);
   void skip(const FrameHeader& header, const std::string& reason, const std::string& detail);
   // Counts an integrated frame of `kind` that started at `start`.
@@ -114,6 +116,7 @@ class RecordingMapper : public FrameConsumer {
   // One integrator per configured laser source (each keeps its own exact-overlay cache).
   std::vector<std::unique_ptr<PolarLaserIntegrator>> source_integrators_;
   RecordingStatistics statistics_;
+  std::map<std::string, double> last_stamp_;  // by source and sensor frame
 };
 
 }  // namespace occupancy_fusion

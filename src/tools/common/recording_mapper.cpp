@@ -199,6 +199,17 @@ OccupancyRaster RecordingMapper::fusedGrid() const {
 }
 
 std::optional<Eigen::Isometry3d> RecordingMapper::poseOf(const FrameHeader& header) {
+  if (header.stamp != 0.0) {  // 0: unstamped (files without times), never a duplicate
+    const auto [last, first] =
+        last_stamp_.try_emplace(header.source + '|' + header.frame_id, header.stamp);
+    if (!first && last->second == header.stamp) {
+      skip(header, "duplicate stamp on " + header.source,
+           "frame of '" + header.frame_id + "' at t = " + std::to_string(header.stamp) +
+               " s has the stamp of the one before it");
+      return std::nullopt;
+    }
+    last->second = header.stamp;
+  }
   if (header.T_map_sensor) return header.T_map_sensor;
   std::string why;
   std::optional<Eigen::Isometry3d> pose =

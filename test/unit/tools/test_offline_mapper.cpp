@@ -197,6 +197,30 @@ TEST_F(OfflineMapperTest, SkipsAndCountsCloudsWithoutTransform) {
   EXPECT_TRUE(fs::is_regular_file(dir_ / "skip" / "map.bt"));
 }
 
+TEST_F(OfflineMapperTest, SkipsACloudWithTheStampOfTheOneBeforeIt) {
+  const fs::path bag_path = dir_ / "duplicate.bag";
+  fs::copy_file(dir_ / "room.bag", bag_path, fs::copy_options::overwrite_existing);
+  {
+    rosbag::Bag bag(bag_path.string(), rosbag::bagmode::Append);
+    const std::vector<Eigen::Vector3f> points = {{1.0f, 0.0f, 2.0f}, {0.0f, 1.0f, 2.0f}};
+    const ros::Time stamp(1000.55);  // within the recorded poses
+    for (int copy = 0; copy < 2; ++copy) {
+      bag.write("/cloud_in", stamp, cloudFromPoints(points, "camera_optical_frame", stamp));
+    }
+  }
+  const RunResult result =
+      runTool(OFFLINE_MAPPER_PATH,
+              "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + bag_path.string() +
+                  "' --output-dir '" + (dir_ / "duplicate").string() + "' --quiet",
+              dir_);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find(std::to_string(kFrames + 1) + " point_cloud integrated, 1 skipped"),
+            std::string::npos)
+      << result.out;
+  EXPECT_NE(result.out.find("skipped 1: duplicate stamp on /cloud_in"), std::string::npos)
+      << result.out;
+}
+
 TEST_F(OfflineMapperTest, FailsWhenNoFrameCanBePlaced) {
   const RunResult result = runTool(
       OFFLINE_MAPPER_PATH,
