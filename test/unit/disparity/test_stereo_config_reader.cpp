@@ -175,7 +175,7 @@ TEST(StereoConfigReader, ParameterSetThenKeys) {
 // values, and it parses into a valid configuration.
 TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
   const std::filesystem::path file =
-      std::filesystem::path(__FILE__).parent_path() / "../../../config/disparity_mapper.yaml";
+      std::filesystem::path(OCCUPANCY_FUSION_SOURCE_DIR) / "config/disparity_mapper.yaml";
   std::map<std::string, std::string> values;
   flatten(YAML::LoadFile(file.string()), "", &values);
   const std::vector<std::string> known = {"parameter_set",

@@ -20,8 +20,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 std::string excerptPath() {
-  const std::string here = __FILE__;  // .../test/unit/laser/real_scan_test.cpp
-  return here.substr(0, here.rfind("/unit/")) + "/data/carmen_csail_excerpt.log";
+  return std::string(OCCUPANCY_FUSION_SOURCE_DIR) + "/test/data/carmen_csail_excerpt.log";
 }
 
 std::vector<CarmenLaserScan> excerpt() {

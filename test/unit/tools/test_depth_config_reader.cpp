@@ -69,7 +69,7 @@ TEST(DepthConfigReader, ErrorsNameTheParameterKey) {
 // The shipped config file parses and sets every field (its k and sigma are scaled to its 0.05 m
 // map, the rest are the defaults it documents).
 TEST(DepthConfigReader, ShippedConfigFileSetsEveryField) {
-  const fs::path repository = fs::path(__FILE__).parent_path() / "../../..";
+  const fs::path repository = OCCUPANCY_FUSION_SOURCE_DIR;
   const YamlParameterSource source =
       YamlParameterSource::fromFile((repository / "config/depth_mapper.yaml").string());
   const PyramidDepthConfig config = readPyramidDepthConfig(source);

@@ -26,10 +26,7 @@ namespace {
 
 using namespace test_support;
 
-fs::path demoData() {
-  const std::string here = __FILE__;
-  return fs::path(here.substr(0, here.rfind("/test/unit/"))) / "data" / "demo";
-}
+fs::path demoData() { return fs::path(OCCUPANCY_FUSION_SOURCE_DIR) / "data" / "demo"; }
 
 const geometry_msgs::TransformStamped* findTransform(
     const std::vector<geometry_msgs::TransformStamped>& transforms, const std::string& parent,

@@ -248,16 +248,19 @@ TEST_F(InputKindsTest, BadFramesInABagAreSkippedAndCounted) {
                                                   "depth_camera_optical_frame", stamp);
     colour.encoding = "rgb8";
     bag.write("/camera/depth/image", stamp, colour);
+    // Between two recorded scans: with the sensor_frame override below it is a scan of its
+    // own, not a duplicate of the recorded one at `stamp`.
+    const ros::Time scan_stamp(1000.55);
     sensor_msgs::LaserScan scan;
     scan.header.frame_id = "unmounted_laser";
-    scan.header.stamp = stamp;
+    scan.header.stamp = scan_stamp;
     scan.angle_min = -1.0f;
     scan.angle_max = 1.0f;
     scan.angle_increment = 0.5f;
     scan.range_min = 0.1f;
     scan.range_max = 10.0f;
     scan.ranges.assign(5, 2.0f);
-    bag.write("/scan_front", stamp, scan);
+    bag.write("/scan_front", scan_stamp, scan);
     bag.close();
   }
   const RunResult result = map("--bag " + quoted(bag_path), "bad");
