@@ -3,10 +3,12 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <ros/time.h>
 #include <rosbag/bag.h>
 #include <rosbag/message_instance.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -35,12 +37,21 @@ class TfPoseSource : public PoseSource {
 
   std::size_t transformCount() const { return transform_count_; }
 
+  // A recording whose tf stamps go back by more than kTimeJump (a bag recorded from a looped
+  // playback, or bags of two runs read together) would mix both passes' poses in one buffer:
+  // tf is read only up to the first such jump, and this is the bag time where it happened.
+  static constexpr double kTimeJump = 1.0;  // s
+  std::optional<ros::Time> timeJumpAt() const { return time_jump_at_; }
+  double timeJumpSeconds() const { return time_jump_seconds_; }
+
  private:
   void load(const rosbag::Bag& bag, const std::string& tf_topic,
             const std::string& static_tf_topic);
 
   std::unique_ptr<tf2::BufferCore> buffer_;
   std::size_t transform_count_ = 0;
+  std::optional<ros::Time> time_jump_at_;
+  double time_jump_seconds_ = 0.0;
 };
 
 // The sensor topics of a bag to map, per kind.

@@ -106,11 +106,25 @@ TfPoseSource::TfPoseSource(const std::vector<const rosbag::Bag*>& bags, const st
 void TfPoseSource::load(const rosbag::Bag& bag, const std::string& tf_topic,
                         const std::string& static_tf_topic) {
   rosbag::View view(bag, rosbag::TopicQuery({tf_topic, static_tf_topic}));
+  std::map<std::pair<std::string, std::string>, ros::Time> latest;  // by parent and child
   for (const rosbag::MessageInstance& message : view) {
+    if (time_jump_at_ && message.getTime() >= *time_jump_at_) return;
     const tf2_msgs::TFMessage::ConstPtr transforms = message.instantiate<tf2_msgs::TFMessage>();
     if (!transforms) continue;  // another type on a tf topic: nothing to learn from it
     const bool is_static = message.getTopic() == static_tf_topic;
     for (const geometry_msgs::TransformStamped& transform : transforms->transforms) {
+      if (!is_static) {
+        ros::Time& last = latest[{transform.header.frame_id, transform.child_frame_id}];
+        const double back = (last - transform.header.stamp).toSec();
+        if (!last.isZero() && back > kTimeJump) {
+          if (!time_jump_at_ || message.getTime() < *time_jump_at_) {
+            time_jump_at_ = message.getTime();
+            time_jump_seconds_ = back;
+          }
+          return;
+        }
+        last = std::max(last, transform.header.stamp);
+      }
       // setTransform rejects malformed transforms (NaN, empty frame) with a ROS_ERROR; skip them
       // rather than stop.
       if (buffer_->setTransform(transform, "bag", is_static)) ++transform_count_;
@@ -361,8 +375,20 @@ void RosbagReader::read(FrameConsumer* consumer,
     view.addQuery(*bag, rosbag::TopicQuery(sensor_topics));
   }
   std::size_t delivered = 0;
+  const std::optional<ros::Time> jump = poses_->timeJumpAt();
   for (const rosbag::MessageInstance& message : view) {
-    deliver(message, consumer);
+    if (jump && message.getTime() >= *jump) {
+      // See TfPoseSource::timeJumpAt: the poses after the jump were not loaded.
+      FrameHeader header;
+      header.source = message.getTopic();
+      consumer->onUnreadable(header, "tf stamps jump back by " +
+                                         std::to_string(poses_->timeJumpSeconds()) +
+                                         " s at bag time " + std::to_string(jump->toSec()) +
+                                         " (a looped recording?): the rest is not mapped; split "
+                                         "the bag there (rosbag filter) to map each pass");
+    } else {
+      deliver(message, consumer);
+    }
     if (after_frame) after_frame(++delivered);
   }
 }

@@ -14,9 +14,11 @@
 #include <string>
 #include <vector>
 
+#include <geometry_msgs/TransformStamped.h>
 #include <octomap/OcTree.h>
 #include <ros/time.h>
 #include <rosbag/bag.h>
+#include <tf2_msgs/TFMessage.h>
 #include <yaml-cpp/yaml.h>
 
 #include "occupancy_fusion/sim/scenes.h"
@@ -219,6 +221,38 @@ TEST_F(OfflineMapperTest, SkipsACloudWithTheStampOfTheOneBeforeIt) {
       << result.out;
   EXPECT_NE(result.out.find("skipped 1: duplicate stamp on /cloud_in"), std::string::npos)
       << result.out;
+}
+
+// A second pass appended after the first (a bag recorded from a looped playback): tf stamps go
+// back 2.75 s. Its poses would mix with the first pass's in one tf buffer, so it is not mapped.
+TEST_F(OfflineMapperTest, StopsWhereTheRecordingsTimeJumpsBack) {
+  const fs::path bag_path = dir_ / "looped.bag";
+  fs::copy_file(dir_ / "room.bag", bag_path, fs::copy_options::overwrite_existing);
+  {
+    rosbag::Bag bag(bag_path.string(), rosbag::bagmode::Append);
+    const ros::Time first_pose(1000.0), replay(2000.0);
+    geometry_msgs::TransformStamped pose;
+    pose.header.frame_id = "map";
+    pose.child_frame_id = "odom";
+    pose.header.stamp = first_pose;
+    pose.transform.rotation.w = 1.0;
+    tf2_msgs::TFMessage poses;
+    poses.transforms.push_back(pose);
+    bag.write("/tf", replay, poses);
+    const std::vector<Eigen::Vector3f> points = {{1.0f, 0.0f, 2.0f}, {0.0f, 1.0f, 2.0f}};
+    const ros::Time stamp(1000.55);
+    bag.write("/cloud_in", replay + ros::Duration(0.1),
+              cloudFromPoints(points, "camera_optical_frame", stamp));
+  }
+  const RunResult result =
+      runTool(OFFLINE_MAPPER_PATH,
+              "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + bag_path.string() +
+                  "' --output-dir '" + (dir_ / "looped").string() + "' --quiet",
+              dir_);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find(std::to_string(kFrames) + " point_cloud integrated"), std::string::npos)
+      << result.out;
+  EXPECT_NE(result.out.find("tf stamps jump back by 2.75"), std::string::npos) << result.out;
 }
 
 TEST_F(OfflineMapperTest, FailsWhenNoFrameCanBePlaced) {
