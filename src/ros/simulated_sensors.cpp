@@ -10,26 +10,12 @@
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "occupancy_fusion/ros/camera_info_message.h"
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/trajectory.h"
 
 namespace occupancy_fusion {
-namespace {
-
-sensor_msgs::CameraInfo cameraInfo(const sim::PinholeCamera& camera) {
-  sensor_msgs::CameraInfo info;
-  info.width = static_cast<std::uint32_t>(camera.width);
-  info.height = static_cast<std::uint32_t>(camera.height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
-  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-  info.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
-  return info;
-}
-
-}  // namespace
 
 Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string& prefix,
                                 const Eigen::Isometry3d& default_pose) {
@@ -134,8 +120,8 @@ void SimulatedDepthCamera::publish(const sim::Scene& scene, const Eigen::Isometr
     image->header.stamp = stamp;
     sensor_msgs::fillImage(*image, sensor_msgs::image_encodings::TYPE_32FC1, depth.height,
                            depth.width, depth.width * sizeof(float), depth.depth.data());
-    auto info = boost::make_shared<sensor_msgs::CameraInfo>(cameraInfo(config_.camera));
-    info->header = image->header;
+    auto info = boost::make_shared<sensor_msgs::CameraInfo>(
+        cameraInfoMessage(config_.camera, image->header.frame_id, image->header.stamp));
     depth_publisher_.publish(image, info);
   }
   if (want_cloud) {

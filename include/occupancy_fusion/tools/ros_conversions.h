@@ -17,7 +17,8 @@
 #include "occupancy_fusion/sensors/depth_image.h"
 #include "occupancy_fusion/sensors/disparity_image.h"
 
-#include "occupancy_fusion/ros/transform_message.h"  // transformMessage for the tools, too
+#include "occupancy_fusion/ros/camera_info_message.h"  // cameraInfoMessage for the tools, too
+#include "occupancy_fusion/ros/transform_message.h"    // transformMessage for the tools, too
 
 namespace occupancy_fusion {
 
@@ -57,9 +58,7 @@ StereoCamera stereoCameraFrom(const stereo_msgs::DisparityImage& message,
 // (height - 1) / 2), fy = f.
 StereoCamera stereoCameraAtImageCentre(const stereo_msgs::DisparityImage& message);
 
-// Messages for simulated recordings.
-sensor_msgs::CameraInfo cameraInfoMessage(const CameraIntrinsics& camera,
-                                          const std::string& frame_id, const ros::Time& stamp);
+// Messages for simulated recordings (cameraInfoMessage: ros/camera_info_message.h).
 // A 16UC1 image in millimetres (0 = no measurement, depths rounded to the nearest mm) or a
 // 32FC1 image in metres (NaN = no measurement) of row-major z-depths in metres (NaN = none).
 sensor_msgs::Image depthImageMessage(const std::vector<float>& depth, int width, int height,

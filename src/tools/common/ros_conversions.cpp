@@ -184,21 +184,6 @@ StereoCamera stereoCameraAtImageCentre(const stereo_msgs::DisparityImage& messag
   return camera;
 }
 
-sensor_msgs::CameraInfo cameraInfoMessage(const CameraIntrinsics& camera,
-                                          const std::string& frame_id, const ros::Time& stamp) {
-  sensor_msgs::CameraInfo info;
-  info.header.frame_id = frame_id;
-  info.header.stamp = stamp;
-  info.width = static_cast<std::uint32_t>(camera.width);
-  info.height = static_cast<std::uint32_t>(camera.height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
-  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-  info.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
-  return info;
-}
-
 sensor_msgs::Image depthImageMessage(const std::vector<float>& depth, int width, int height,
                                      bool millimetres, const std::string& frame_id,
                                      const ros::Time& stamp) {
