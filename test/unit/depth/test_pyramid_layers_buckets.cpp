@@ -11,42 +11,14 @@
 #include <vector>
 
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "pyramid_reference_scan.h"
 
 namespace occupancy_fusion {
 namespace {
 
-struct ScanResult {
-  float kept = std::numeric_limits<float>::quiet_NaN();
-  bool tie = false;  // another pixel with a different value had the same score
-};
-
-ScanResult scanCell(const DistancePyramid& pyramid, const CameraIntrinsics& camera, int level,
-                    int cell_u, int cell_v) {
-  const int side = 1 << level;
-  const float target = static_cast<float>(pyramid.threshold(level));
-  ScanResult result;
-  float best_score = std::numeric_limits<float>::infinity();
-  for (int v = cell_v * side; v < std::min(camera.height, (cell_v + 1) * side); ++v) {
-    for (int u = cell_u * side; u < std::min(camera.width, (cell_u + 1) * side); ++u) {
-      const float value = pyramid.at(0, u, v);
-      if (std::isnan(value)) continue;
-      const float score = std::abs(value - target);
-      if (score < best_score) {
-        best_score = score;
-        result.kept = value;
-        result.tie = false;
-      } else if (score == best_score && value != result.kept) {
-        result.tie = true;
-      }
-    }
-  }
-  return result;
-}
-
-bool sameBits(float a, float b) {
-  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
-  return std::memcmp(&a, &b, sizeof(float)) == 0;
-}
+using test_support::sameBits;
+using test_support::scanCell;
+using test_support::ScanResult;
 
 TEST(DistancePyramid, CoarseLayersEqualAScanWhenFloatScoresTie) {
   CameraIntrinsics camera;
