@@ -41,12 +41,16 @@ std::string readBytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// The last octomap_point_cloud_centers message, from a subscription made when asked.
+// The last octomap_point_cloud_centers message, from a subscription made when asked. The topic
+// is latched, and roscpp hands a new subscription the latched message of a publisher that is
+// already gone (an unloaded MapServer) when its link is not torn down yet: clouds stamped before
+// `not_before` are such leftovers and ignored.
 class CloudWatcher {
  public:
-  void subscribe() {
+  void subscribe(const ros::Time& not_before = ros::Time()) {
     std::lock_guard<std::mutex> lock(mutex_);
     last_.reset();
+    not_before_ = not_before;
     subscriber_ = ros::NodeHandle().subscribe("/octomap_point_cloud_centers", 1,
                                               &CloudWatcher::onCloud, this);
   }
@@ -59,10 +63,12 @@ class CloudWatcher {
  private:
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (cloud->header.stamp < not_before_) return;
     last_ = cloud;
   }
   mutable std::mutex mutex_;
   ros::Subscriber subscriber_;
+  ros::Time not_before_;
   sensor_msgs::PointCloud2ConstPtr last_;
 };
 
@@ -178,7 +184,7 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   ASSERT_TRUE(unloadNodelet("/simulator"));
   const std::string b = (folder / "b").string();
   setMapServerParameters("/map_server_b", a + ".ot", "", b);
-  watcher.subscribe();
+  watcher.subscribe(ros::Time::now());
   ASSERT_TRUE(loadNodelet("/map_server_b", "occupancy_fusion/MapServer"));
   ASSERT_TRUE(waitUntil([&] { return watcher.last() != nullptr; }, 10.0));
   // Right after start, the published cloud is exactly the file's occupied voxels.
