@@ -578,9 +578,13 @@ int floorToInt(double x) {
 
 }  // namespace
 
-bool PyramidDepthIntegrator::projectIntoImage(const CameraIntrinsics& camera,
-                                              const Eigen::Vector3d& point, double* u, double* v,
-                                              double* distance) const {
+// The per-voxel functions below are `inline` (they are private, used in this file only): in a
+// shared library built with -fPIC the compiler may not inline an ordinary member function,
+// since another library could interpose it, so each voxel paid five calls through the PLT and
+// passed LayerCells through memory.
+inline bool PyramidDepthIntegrator::projectIntoImage(const CameraIntrinsics& camera,
+                                                     const Eigen::Vector3d& point, double* u,
+                                                     double* v, double* distance) const {
   // The image test first: it rejects most voxels of the frustum's border blocks without the
   // square root.
   if (point.z() <= 0.0) return false;
@@ -594,18 +598,16 @@ bool PyramidDepthIntegrator::projectIntoImage(const CameraIntrinsics& camera,
   return *distance >= config_.min_range;
 }
 
-float PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
-                                               const Eigen::Vector3d& point) const {
+inline float PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
+                                                      const Eigen::Vector3d& point) const {
   double u = 0.0, v = 0.0, distance = 0.0;
   if (!projectIntoImage(frame.camera, point, &u, &v, &distance)) return kNaN;
   if (config_.method == DepthMethod::kAndert) return andertLogOdds(frame, u, v, distance);
   return pyramidLogOdds(frame, u, v, distance);
 }
 
-PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(const DepthFrame& frame,
-                                                                       int level, double pixel_u,
-                                                                       double pixel_v,
-                                                                       double distance) const {
+inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
+    const DepthFrame& frame, int level, double pixel_u, double pixel_v, double distance) const {
   // Eq. 14 with pixel centres at integer coordinates: cell U of layer i is centred on pixel
   // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5 (>= -0.5 inside the image).
   const DistancePyramid& pyramid = frame.pyramid;
@@ -644,7 +646,8 @@ PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(const Dep
   return result;
 }
 
-float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells, double distance) const {
+inline float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells,
+                                                     double distance) const {
   double weighted = 0.0;
   for (int i = 0; i < 4; ++i) {
     weighted += cells.weights[i] * cellLogOdds(distance, cells.measured[i]);  // Eq. 16
@@ -654,8 +657,8 @@ float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells, double di
   return static_cast<float>(cells.complete ? weighted : weighted / cells.weight_sum);
 }
 
-float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, double u, double v,
-                                             double distance) const {
+inline float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, double u, double v,
+                                                    double distance) const {
   const DistancePyramid& pyramid = frame.pyramid;
   const int level = bracketingLevel(pyramid, distance);
   // Beyond t_0, or nearer than the last layer's t: one layer alone.
@@ -681,8 +684,8 @@ float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, double u, 
                                                 pyramid.inverseGap(level));
 }
 
-float PyramidDepthIntegrator::andertLogOdds(const DepthFrame& frame, double u, double v,
-                                            double distance) const {
+inline float PyramidDepthIntegrator::andertLogOdds(const DepthFrame& frame, double u, double v,
+                                                   double distance) const {
   // The layer whose cells best match the voxel's footprint of t_0 / z pixels, nearest cell.
   const DistancePyramid& pyramid = frame.pyramid;
   const double footprint_log2 = std::log2(pyramid.threshold(0) / distance);
