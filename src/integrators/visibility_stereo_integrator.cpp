@@ -127,12 +127,20 @@ NormalCdfTable::NormalCdfTable() : values_(kSize + 1) {
   values_[kSize] = values_[kSize - 1];  // read by operator() only with fraction 0
 }
 
-double nextVisibility(double previous, double p_occluded, const VisibilityStereoConfig& config) {
-  // Eq. 3: P(V_i | not V_i-1) = 0 leaves only the terms conditioned on a
-  // visible predecessor.
+namespace {
+// Eq. 3, here so that the ray caster's every step inlines it (an exported function of a shared
+// library is called through the PLT).
+inline double visibilityAfter(double previous, double p_occluded,
+                              const VisibilityStereoConfig& config) {
+  // P(V_i | not V_i-1) = 0 leaves only the terms conditioned on a visible predecessor.
   const double visibility = previous * (config.prob_visible_if_occluded * p_occluded +
                                         config.prob_visible_if_not_occluded * (1.0 - p_occluded));
   return visibility >= config.visibility_max ? 1.0 : visibility;
+}
+}  // namespace
+
+double nextVisibility(double previous, double p_occluded, const VisibilityStereoConfig& config) {
+  return visibilityAfter(previous, p_occluded, config);
 }
 
 double occupancyAfterMeasurement(double p_occupied, bool hit, double visibility,
@@ -391,7 +399,7 @@ class RayCaster {
         updates_->reduce(voxel.entry, 0.0f, 1.0f);
         continue;
       }
-      visibility = nextVisibility(visibility, voxel.occlusion, frame_.config);  // Eq. 3
+      visibility = visibilityAfter(visibility, voxel.occlusion, frame_.config);  // Eq. 3
       if (visibility < frame_.config.visibility_min) {
         ++counters_.rays_invisible;
         return;
@@ -415,7 +423,7 @@ class RayCaster {
     double visibility = 1.0;
     for (std::size_t j = 0; j < max_steps; ++j) {
       const CachedVoxel& voxel = lookUp(ray.current(), j, true);
-      visibility = nextVisibility(visibility, voxel.occlusion, f.config);  // Eq. 3
+      visibility = visibilityAfter(visibility, voxel.occlusion, f.config);  // Eq. 3
       if (visibility < f.config.visibility_min) {
         ++counters_.rays_invisible;
         return;
@@ -453,6 +461,31 @@ bool isUsableRay(const Eigen::Vector3d& point, float sigma, const Eigen::Vector3
   return isUsable(point, origin, resolution, needs_direction) && std::isfinite(sigma) && sigma >= 0;
 }
 
+// Per point: the key of its end voxel and its squared range, or kUnusableRay. Independent per
+// point, so computed on every thread before the (sequential) grouping.
+constexpr std::uint64_t kUnusableRay = ~std::uint64_t{0};  // packKey uses 63 bits
+constexpr std::size_t kParallelPoints = 8192;
+
+struct RayEnd {
+  std::uint64_t key;
+  double squared_range;
+};
+
+std::vector<RayEnd> rayEnds(const std::vector<Eigen::Vector3f>& points,
+                            const std::vector<float>& sigmas, const Eigen::Vector3d& origin,
+                            double resolution, bool needs_direction) {
+  std::vector<RayEnd> ends(points.size());
+  const long count = static_cast<long>(points.size());
+#pragma omp parallel for schedule(static) if (points.size() >= kParallelPoints)
+  for (long i = 0; i < count; ++i) {
+    const Eigen::Vector3d point = points[i].cast<double>();
+    ends[i] = isUsableRay(point, sigmas[i], origin, resolution, needs_direction)
+                  ? RayEnd{packKey(voxelIndexOf(point, resolution)), (point - origin).squaredNorm()}
+                  : RayEnd{kUnusableRay, 0.0};
+  }
+  return ends;
+}
+
 // bundle_rays: per end voxel the nearest and the farthest usable point (see
 // VisibilityStereoConfig::bundle_rays), in the order of each voxel's first point, so that
 // neighbouring pixels stay neighbouring rays for the previous-ray cache; one ray where they are the
@@ -468,19 +501,18 @@ std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3
     std::uint32_t nearest, farthest;
     double nearest_squared_range, farthest_squared_range;
   };
+  const std::vector<RayEnd> ends = rayEnds(points, sigmas, origin, resolution, needs_direction);
   std::vector<Bundle> bundles;
   SpatialKeyMap<std::uint32_t> bundle_of_voxel;
-  std::uint64_t last_key = 0;
+  std::uint64_t last_key = kUnusableRay;
   std::uint32_t last_bundle = 0;
-  for (std::uint32_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d point = points[i].cast<double>();
-    if (!isUsableRay(point, sigmas[i], origin, resolution, needs_direction)) {
+  for (std::uint32_t i = 0; i < ends.size(); ++i) {
+    const auto [key, squared_range] = ends[i];
+    if (key == kUnusableRay) {
       ++*skipped;
       continue;
     }
-    const std::uint64_t key = packKey(voxelIndexOf(point, resolution));
-    const double squared_range = (point - origin).squaredNorm();
-    if (bundles.empty() || key != last_key) {
+    if (key != last_key) {
       const auto [it, inserted] =
           bundle_of_voxel.try_emplace(key, static_cast<std::uint32_t>(bundles.size()));
       if (inserted) bundles.push_back({i, i, squared_range, squared_range});
@@ -546,6 +578,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   // Without bundling every point is a ray; its usability is checked in the parallel loop.
   const int count = static_cast<int>(config_.bundle_rays ? bundles.size() : points_in_map.size());
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
+  const int chunk = std::clamp(count / (8 * threads), 64, 512);
   std::vector<FrameUpdates> per_thread(threads);
   std::size_t visits = 0, hits = 0, invisible = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : skipped, visits, hits, invisible)
@@ -553,8 +586,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     MapSnapshot snapshot(map);
     RayCaster caster(frame, &snapshot, &per_thread[omp_get_thread_num()]);
     // Chunks of neighbouring pixels keep the previous-ray cache useful on every
-    // thread.
-#pragma omp for schedule(dynamic, 512)
+    // thread; at least eight per thread, so that the threads finish together.
+#pragma omp for schedule(dynamic, chunk)
     for (int ray = 0; ray < count; ++ray) {
       const std::uint32_t i = config_.bundle_rays ? bundles[ray] : static_cast<std::uint32_t>(ray);
       Eigen::Vector3d point = points_in_map[i].cast<double>();
