@@ -201,6 +201,37 @@ TEST_P(WallTest, FreeInFrontOccupiedAtTheWallUnknownBehind) {
   EXPECT_GE(free_in_front, free_there);
 }
 
+TEST_P(WallTest, EveryVoxelOfTheFrustumGetsItsPerVoxelValueUnderATiltedPose) {
+  // A tilted, offset camera: voxel rows cross the image border obliquely, so integrate()'s
+  // per-row skipping of voxels outside the image must keep every voxel that projects inside.
+  std::vector<float> depth(64 * 48);
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) depth[v * 64 + u] = static_cast<float>(1.2 + 0.02 * u);
+  }
+  const Eigen::Isometry3d pose =
+      Eigen::Translation3d(0.13, -0.27, 0.41) *
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1.0, 2.0, -0.5).normalized());
+  const PyramidDepthIntegrator integrator(config_);
+  const DepthImageView view{64, 48, depth.data()};
+  integrator.integrate(view, camera_, pose, &map_);
+  const DepthFrame frame = integrator.prepare(view, camera_, pose, kResolution);
+  std::size_t expected_known = 0, mismatches = 0;
+  for (const BlockIndex& block : integrator.candidateBlocks(frame)) {
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      const VoxelIndex index = VoxelMap::voxelIndex(block, linear);
+      const std::optional<float> expected = integrator.voxelLogOdds(frame, map_.centerOf(index));
+      const std::optional<float> stored = map_.logOdds(index);
+      expected_known += expected.has_value();
+      if (expected.has_value() != stored.has_value() || (expected && *expected != *stored)) {
+        ++mismatches;
+      }
+    }
+  }
+  EXPECT_GT(expected_known, 5000u);
+  EXPECT_EQ(expected_known, map_.knownVoxelCount());
+  EXPECT_EQ(mismatches, 0u);
+}
+
 TEST_P(WallTest, InvalidPixelsChangeNothing) {
   // 0, NaN and beyond max_range (10 m) everywhere: no block allocated, a prior value untouched.
   std::vector<float> depth(64 * 48, 0.0f);
