@@ -791,6 +791,8 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
   std::vector<char> all_valid(tile_count, 1);
   // Slightly nearer than Eq. 7's support, so rounding cannot claim a voxel it would not give.
   constexpr double kFrontSafety = 1e-6;  // m
+  // Likewise beyond the float-rounded reach (its rounding error is below 1e-6 m within 10 m).
+  constexpr float kReachSafety = 1e-5f;  // m
   // From each tile's nearest and farthest measurement: reach grows with the measurement, and
   // front = measured - supportSigmas() sigma(measured) is at least nearest - supportSigmas()
   // sigma(farthest) (exact for constant sigma). Branch-free min / max passes; NaN (invalid)
@@ -839,8 +841,8 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
   const double radius = 0.5 * std::sqrt(3.0) * block_size;
   const double t0 = pyramid.threshold(0);
 
-  // nullopt: the block gets nothing; else whether it lies wholly in front of Eq. 7's support.
-  auto classify = [&](const BlockIndex& block) -> std::optional<bool> {
+  // nullopt: the block gets nothing.
+  auto classify = [&](const BlockIndex& block) -> std::optional<CandidateBlock> {
     const Eigen::Vector3d center = (block.cast<double>().array() + 0.5) * block_size;
     const Eigen::Vector3d p = frame.T_camera_map * center;
     const double distance = p.norm();
@@ -881,7 +883,13 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
       }
     }
     if (footprint_reach < near) return std::nullopt;
-    return footprint_valid && distance + radius < footprint_front;
+    CandidateBlock candidate;
+    candidate.index = block;
+    candidate.far_in_front = footprint_valid && distance + radius < footprint_front;
+    candidate.reach = footprint_reach + kReachSafety;
+    // Per voxel only where the far-in-front branch of Eq. 15-17 gives the constant exactly.
+    if (footprint_valid && !table_.empty()) candidate.front = footprint_front;
+    return candidate;
   };
 
   std::vector<CandidateBlock> blocks;
@@ -893,8 +901,8 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
       for (int y = first.y(); y <= last.y(); ++y) {
         for (int x = first.x(); x <= last.x(); ++x) {
           const BlockIndex block(x, y, z);
-          if (const std::optional<bool> far_in_front = classify(block)) {
-            mine.push_back({block, *far_in_front});
+          if (const std::optional<CandidateBlock> candidate = classify(block)) {
+            mine.push_back(*candidate);
           }
         }
       }
@@ -1005,15 +1013,16 @@ int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const Candidat
       for (int x = run.first; x <= run.last; ++x) {
         const Eigen::Vector3d point =
             frame.T_camera_map * map.centerOf(first + VoxelIndex(x, y, z));
-        float delta = kNaN;
-        if (!block.far_in_front) {
-          delta = projectedLogOdds(frame, point);
-        } else {
-          // The same tests as projectedLogOdds; every cell read gives Eq. 7's constant.
-          double u = 0.0, v = 0.0, distance = 0.0;
-          if (projectIntoImage(camera, point, &u, &v, &distance)) delta = far_in_front;
+        // The same tests as projectedLogOdds, then the block's bounds before the pyramid.
+        double u = 0.0, v = 0.0, distance = 0.0;
+        if (!projectIntoImage(camera, point, &u, &v, &distance)) continue;
+        float delta = far_in_front;
+        if (!block.far_in_front && !(distance < block.front)) {
+          if (distance > block.reach) continue;
+          delta = config_.method == DepthMethod::kAndert ? andertLogOdds(frame, u, v, distance)
+                                                         : pyramidLogOdds(frame, u, v, distance);
+          if (std::isnan(delta)) continue;
         }
-        if (std::isnan(delta)) continue;
         deltas[VoxelBlock::linearIndex(x, y, z)] = delta;
         ++count;
       }
