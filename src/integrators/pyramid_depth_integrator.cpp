@@ -640,9 +640,12 @@ inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
     result.measured[i] = valid ? measured : static_cast<float>(distance);
     result.weight_sum += result.weights[i];
     result.complete = result.complete && valid;
-    result.informs = result.informs || (valid && model_.informs(distance, measured));
     result.nearest = valid && measured < result.nearest ? measured : result.nearest;
+    result.farthest = valid && measured > result.farthest ? measured : result.farthest;
   }
+  // DepthInverseModel::informs grows with the measurement (also in floating point: every step
+  // of measured + behind sigma(measured) is monotonic), so the farthest valid cell decides.
+  result.informs = result.valid() && model_.informs(distance, result.farthest);
   return result;
 }
 

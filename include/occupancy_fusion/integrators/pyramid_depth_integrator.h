@@ -220,7 +220,8 @@ class PyramidDepthIntegrator {
     double weight_sum = 0.0;
     bool informs = false;  // at least one valid cell informs the voxel
     bool complete = true;  // all four cells valid
-    float nearest = std::numeric_limits<float>::infinity();  // of the valid cells
+    float nearest = std::numeric_limits<float>::infinity();    // of the valid cells
+    float farthest = -std::numeric_limits<float>::infinity();  // of the valid cells
     bool valid() const { return weight_sum > 0.0; }
   };
   // The per-voxel functions return NaN for "no update" (no std::optional in the voxel loop).
