@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "occupancy_fusion/map/spatial_key.h"
@@ -778,6 +779,31 @@ std::vector<BlockIndex> PyramidDepthIntegrator::candidateBlocks(const DepthFrame
   return blocks;
 }
 
+namespace {
+
+// Nearest and farthest valid distance and the valid count per pixel column, over the rows
+// added (NaN, invalid, never compares, so it drops out).
+struct ColumnExtremes {
+  explicit ColumnExtremes(int width) : nearest(width), farthest(width), valid(width) {}
+  void reset() {
+    std::fill(nearest.begin(), nearest.end(), std::numeric_limits<float>::infinity());
+    std::fill(farthest.begin(), farthest.end(), -std::numeric_limits<float>::infinity());
+    std::fill(valid.begin(), valid.end(), 0);
+  }
+  void add(const float* row) {
+    const int width = static_cast<int>(valid.size());
+    for (int u = 0; u < width; ++u) {
+      nearest[u] = row[u] < nearest[u] ? row[u] : nearest[u];
+      farthest[u] = row[u] > farthest[u] ? row[u] : farthest[u];
+      valid[u] += isValidMeasurement(row[u]);
+    }
+  }
+  std::vector<float> nearest, farthest;
+  std::vector<int> valid;
+};
+
+}  // namespace
+
 std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cullBlocks(
     const DepthFrame& frame) const {
   const CameraIntrinsics& camera = frame.camera;
@@ -802,29 +828,36 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
   // never compares, so it drops out.
   const float* distances = pyramid.cells(0);
   const bool parallel = static_cast<long>(camera.width) * camera.height >= kParallelPixels;
-#pragma omp parallel for schedule(static) if (parallel)
-  for (int tv = 0; tv < tiles_v; ++tv) {
-    const int v_end = std::min(camera.height, (tv + 1) * kTile);
-    for (int tu = 0; tu < tiles_u; ++tu) {
-      const int u_end = std::min(camera.width, (tu + 1) * kTile);
-      float nearest = std::numeric_limits<float>::infinity();
-      float farthest = -std::numeric_limits<float>::infinity();
-      int valid = 0;
+#pragma omp parallel if (parallel)
+  {
+    // Per pixel column over the rows of one row of tiles (elementwise, so it vectorises),
+    // then per tile over its columns: the same extremes as a scan of each tile.
+    ColumnExtremes columns(camera.width);
+#pragma omp for schedule(static)
+    for (int tv = 0; tv < tiles_v; ++tv) {
+      const int v_end = std::min(camera.height, (tv + 1) * kTile);
+      columns.reset();
       for (int v = tv * kTile; v < v_end; ++v) {
-        const float* row = distances + static_cast<std::size_t>(v) * camera.width;
-        for (int u = tu * kTile; u < u_end; ++u) {
-          nearest = row[u] < nearest ? row[u] : nearest;
-          farthest = row[u] > farthest ? row[u] : farthest;
-          valid += isValidMeasurement(row[u]);
-        }
+        columns.add(distances + static_cast<std::size_t>(v) * camera.width);
       }
-      const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + tu;
-      all_valid[tile] = valid == (v_end - tv * kTile) * (u_end - tu * kTile);
-      if (valid == 0) continue;
-      const double sigma_far = model_.sigmaAt(farthest);
-      reach[tile] = static_cast<float>(farthest + config_.unknown_behind_sigmas * sigma_far);
-      front[tile] = static_cast<float>(nearest - DepthInverseModel::supportSigmas() * sigma_far -
-                                       kFrontSafety);
+      for (int tu = 0; tu < tiles_u; ++tu) {
+        const int u_end = std::min(camera.width, (tu + 1) * kTile);
+        float nearest = std::numeric_limits<float>::infinity();
+        float farthest = -std::numeric_limits<float>::infinity();
+        int valid = 0;
+        for (int u = tu * kTile; u < u_end; ++u) {
+          nearest = std::min(nearest, columns.nearest[u]);
+          farthest = std::max(farthest, columns.farthest[u]);
+          valid += columns.valid[u];
+        }
+        const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + tu;
+        all_valid[tile] = valid == (v_end - tv * kTile) * (u_end - tu * kTile);
+        if (valid == 0) continue;
+        const double sigma_far = model_.sigmaAt(farthest);
+        reach[tile] = static_cast<float>(farthest + config_.unknown_behind_sigmas * sigma_far);
+        front[tile] = static_cast<float>(nearest - DepthInverseModel::supportSigmas() * sigma_far -
+                                         kFrontSafety);
+      }
     }
   }
   const float max_reach = *std::max_element(reach.begin(), reach.end());
@@ -993,6 +1026,7 @@ class BlockImageRuns {
 
 int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,
                                          const VoxelMap& map, float* deltas) const {
+  std::fill(deltas, deltas + VoxelBlock::kVolume, kNaN);
   int count = 0;
   if (config_.method == DepthMethod::kIdeal) {
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
@@ -1045,7 +1079,10 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
 
   // Compute every voxel's increment outside the map's lock (NaN: no update).
   const int count = static_cast<int>(candidates.size());
-  std::vector<float> deltas(static_cast<std::size_t>(count) * VoxelBlock::kVolume, kNaN);
+  // Left uninitialised here: each block's NaN fill runs on the thread computing it, in its cache
+  // (a serial fill of 4-5 MB per frame at 0.02 m otherwise).
+  const std::unique_ptr<float[]> deltas(
+      new float[static_cast<std::size_t>(count) * VoxelBlock::kVolume]);
   std::vector<int> updated(count, 0);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int i = 0; i < count; ++i) {

@@ -268,7 +268,7 @@ class PyramidDepthIntegrator {
   // voxelLogOdds for a voxel centre already in the camera frame (pyramid and Andert); NaN: no
   // update.
   float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
-  // Fills the kVolume increments of one block (NaN: no update); returns how many it set.
+  // Writes all kVolume increments of one block (NaN: no update); returns how many are not NaN.
   int blockLogOdds(const DepthFrame& frame, const CandidateBlock& block, const VoxelMap& map,
                    float* deltas) const;
 
