@@ -804,6 +804,68 @@ struct ColumnExtremes {
 
 }  // namespace
 
+namespace {
+
+// Bounds of the pixels of some 8 x 8 tiles (see cullBlocks).
+struct TileBounds {
+  float reach = -1.0f;                                   // the farthest any of them informs
+  float front = std::numeric_limits<float>::infinity();  // Eq. 7's constant ends here
+  bool all_valid = true;
+  void merge(const TileBounds& other) {
+    reach = std::max(reach, other.reach);
+    front = std::min(front, other.front);
+    all_valid = all_valid && other.all_valid;
+  }
+};
+
+// A rectangle of tiles' bounds in two reads per tile row instead of one per tile (a block's
+// footprint at 0.08 m spans hundreds of tiles): per row, the bounds of every run of 2^k tiles
+// (a sparse table); any run of n tiles is the union of two runs of 2^floor(log2 n), and
+// max / min / and do not mind the overlap, so the result equals the tile by tile one.
+class TileFootprints {
+ public:
+  TileFootprints(const std::vector<float>& reach, const std::vector<float>& front,
+                 const std::vector<char>& all_valid, int tiles_u)
+      : tiles_u_(tiles_u) {
+    runs_.emplace_back(reach.size());
+    for (std::size_t tile = 0; tile < reach.size(); ++tile) {
+      runs_[0][tile] = {reach[tile], front[tile], all_valid[tile] != 0};
+    }
+    for (int length = 2; length <= tiles_u_; length *= 2) {
+      const std::vector<TileBounds>& half = runs_.back();
+      std::vector<TileBounds> runs(half.size());
+      for (std::size_t row = 0; row < half.size(); row += tiles_u_) {
+        for (int tu = 0; tu + length <= tiles_u_; ++tu) {
+          runs[row + tu] = half[row + tu];
+          runs[row + tu].merge(half[row + tu + length / 2]);
+        }
+      }
+      runs_.push_back(std::move(runs));
+    }
+  }
+
+  // Tiles tu0 ... tu1 of rows tv0 ... tv1 (nothing: the bounds of no pixel).
+  TileBounds over(int tu0, int tu1, int tv0, int tv1) const {
+    TileBounds bounds;
+    if (tu0 > tu1) return bounds;
+    int level = 0;
+    while ((2 << level) <= tu1 - tu0 + 1) ++level;
+    const std::vector<TileBounds>& runs = runs_[level];
+    for (int tv = tv0; tv <= tv1; ++tv) {
+      const std::size_t row = static_cast<std::size_t>(tv) * tiles_u_;
+      bounds.merge(runs[row + tu0]);
+      bounds.merge(runs[row + tu1 + 1 - (1 << level)]);
+    }
+    return bounds;
+  }
+
+ private:
+  int tiles_u_;
+  std::vector<std::vector<TileBounds>> runs_;  // runs_[k][row + tu]: tiles tu ... tu + 2^k - 1
+};
+
+}  // namespace
+
 std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cullBlocks(
     const DepthFrame& frame) const {
   const CameraIntrinsics& camera = frame.camera;
@@ -860,6 +922,7 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
       }
     }
   }
+  const TileFootprints footprints(reach, front, all_valid, tiles_u);
   const float max_reach = *std::max_element(reach.begin(), reach.end());
   if (max_reach <= config_.min_range) return {};
 
@@ -907,17 +970,10 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
     const int tu1 = std::min(tiles_u - 1, static_cast<int>(std::max(0.0, u_hi + 0.5)) / kTile);
     const int tv0 = std::max(0, static_cast<int>(std::floor(v_lo + 0.5)) / kTile);
     const int tv1 = std::min(tiles_v - 1, static_cast<int>(std::max(0.0, v_hi + 0.5)) / kTile);
-    float footprint_reach = -1.0f;
-    float footprint_front = std::numeric_limits<float>::infinity();
-    bool footprint_valid = true;
-    for (int tv = tv0; tv <= tv1; ++tv) {
-      for (int tu = tu0; tu <= tu1; ++tu) {
-        const std::size_t tile = static_cast<std::size_t>(tv) * tiles_u + tu;
-        footprint_reach = std::max(footprint_reach, reach[tile]);
-        footprint_front = std::min(footprint_front, front[tile]);
-        footprint_valid = footprint_valid && all_valid[tile];
-      }
-    }
+    const TileBounds footprint = footprints.over(tu0, tu1, tv0, tv1);
+    const float footprint_reach = footprint.reach;
+    const float footprint_front = footprint.front;
+    const bool footprint_valid = footprint.all_valid;
     if (footprint_reach < near) return std::nullopt;
     CandidateBlock candidate;
     candidate.index = block;
