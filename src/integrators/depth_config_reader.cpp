@@ -41,6 +41,7 @@ PyramidDepthConfig readPyramidDepthConfig(const ParameterSource& source) {
   source.get(kKeyPrefix + "max_range", &config.max_range);
   source.get(kKeyPrefix + "unknown_behind_sigmas", &config.unknown_behind_sigmas);
   source.get(kKeyPrefix + "max_pyramid_levels", &config.max_pyramid_levels);
+  source.get(kKeyPrefix + "finer_layers", &config.finer_layers);
   try {
     config.validate();
   } catch (const std::invalid_argument& error) {

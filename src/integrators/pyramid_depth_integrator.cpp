@@ -213,6 +213,8 @@ void PyramidDepthConfig::validate() const {
           "PyramidDepthConfig.unknown_behind_sigmas must be finite and > 0");
   require(max_pyramid_levels >= 1 && max_pyramid_levels <= 24,
           "PyramidDepthConfig.max_pyramid_levels must be in [1, 24]");
+  require(finer_layers >= 0 && finer_layers <= 4,
+          "PyramidDepthConfig.finer_layers must be in [0, 4]");
 }
 
 DepthInverseModel::DepthInverseModel(const PyramidDepthConfig& config)
@@ -545,7 +547,9 @@ DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
                                            const Eigen::Isometry3d& T_map_camera,
                                            double resolution) const {
   require(std::isfinite(resolution) && resolution > 0.0, "resolution must be finite and > 0");
-  const double t0 = std::max(camera.fx, camera.fy) * resolution;  // Eq. 11's t_0
+  // Eq. 11's t_0, where a voxel projects onto one pixel; finer_layers (not the paper) divides it.
+  const int finer = config_.method == DepthMethod::kPyramid ? config_.finer_layers : 0;
+  const double t0 = std::max(camera.fx, camera.fy) * resolution / static_cast<double>(1 << finer);
   const int levels =
       config_.method == DepthMethod::kIdeal
           ? 1

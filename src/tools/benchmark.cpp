@@ -224,11 +224,12 @@ const std::vector<Workload>& workloads() {
       {"depth",
        "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--k K] "
        "[--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal] [--image PNG]\n"
+       "      [--finer_layers F]\n"
        "      a depth sequence in the 7-Scenes layout through the pyramidal depth integrator,\n"
        "      and K of its frames as point clouds through octomap::OcTree::insertPointCloud\n"
        "      (plain and discretized); speedup is octomap / ours in ms per frame",
        {"folder", "resolution", "frames", "octomap-frames", "k", "sigma", "sigma_quadratic",
-        "method", "image"},
+        "method", "image", "finer_layers"},
        runDepth},
       {"depth-fig5",
        "[--output PNG] [--sweep_max PX]\n"
@@ -240,12 +241,12 @@ const std::vector<Workload>& workloads() {
        "[--scenes box,spheres] [--methods pyramid,andert,ideal] [--views N] [--resolution R]\n"
        "      [--k K] [--sigma S] [--sigma_quadratic Q] [--unknown_behind_sigmas U]\n"
        "      [--max_range M] [--clamp on|off] [--observe_views N] [--score_every N]\n"
-       "      [--region auto|frustum|surface] [--points_csv PREFIX]\n"
+       "      [--region auto|frustum|surface] [--points_csv PREFIX] [--finer_layers F]\n"
        "      Pirker et al. Sec. 5.1: N of the 181 sweep views of BOX / SPHERES; surface points\n"
        "      within one voxel of the p = 0.5 iso-surface, observed free voxels labelled free",
        {"scenes", "methods", "views", "resolution", "k", "sigma", "sigma_quadratic",
         "unknown_behind_sigmas", "max_range", "clamp", "observe_views", "score_every",
-        "points_csv", "region"},
+        "points_csv", "region", "finer_layers"},
        runDepthAccuracy},
       {"laser",
        "<CARMEN log, .gz accepted> [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"

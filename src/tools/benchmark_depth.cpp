@@ -227,6 +227,7 @@ int runDepth(const CommandLine& args) {
   config.sigma = args.doubleValue("sigma", 0.05);
   config.sigma_quadratic = args.doubleValue("sigma_quadratic", 0.0);
   config.method = depthMethodFromString(args.value("method", "pyramid"));
+  config.finer_layers = args.intValue("finer_layers", 0);
   const PyramidDepthIntegrator integrator(config);
 
   const CameraIntrinsics& camera = folder.camera();
@@ -245,10 +246,11 @@ int runDepth(const CommandLine& args) {
   }
   const int threads = omp_get_max_threads();
   std::printf(
-      "# %zu frames of %dx%d, fx=%g; method=%s k=%g sigma=%g sigma_quadratic=%g threads=%d; "
-      "octomap on %d of the frames (--octomap-frames), max_range unlimited\n",
+      "# %zu frames of %dx%d, fx=%g; method=%s k=%g sigma=%g sigma_quadratic=%g "
+      "finer_layers=%d threads=%d; octomap on %d of the frames (--octomap-frames), max_range "
+      "unlimited\n",
       frames.size(), camera.width, camera.height, camera.fx, toString(config.method).c_str(),
-      config.k, config.sigma, config.sigma_quadratic, threads, octomap_count);
+      config.k, config.sigma, config.sigma_quadratic, config.finer_layers, threads, octomap_count);
   std::fflush(stdout);
 
   std::vector<std::string> summary;

@@ -366,15 +366,16 @@ int runDepthAccuracy(const CommandLine& args) {
   config.k = args.doubleValue("k", config.sigma);
   config.sigma_quadratic = args.doubleValue("sigma_quadratic", 0.0);
   config.unknown_behind_sigmas = args.doubleValue("unknown_behind_sigmas", 3.0);
+  config.finer_layers = args.intValue("finer_layers", 0);  // not the paper unless 0
   config.max_range = max_range;
   const CameraIntrinsics camera = sim::pirkerSyntheticCamera();
   std::printf(
       "# %d of the sweep's 181 views (observed points from %d), %dx%d f=%g c=(%g, %g); "
-      "resolution=%g k=%g sigma=%g sigma_quadratic=%g unknown_behind_sigmas=%g clamp=%s "
-      "threads=%d\n",
+      "resolution=%g k=%g sigma=%g sigma_quadratic=%g unknown_behind_sigmas=%g finer_layers=%d "
+      "clamp=%s threads=%d\n",
       view_count, observe_count, camera.width, camera.height, camera.fx, camera.cx, camera.cy,
       options.resolution, config.k, config.sigma, config.sigma_quadratic,
-      config.unknown_behind_sigmas, clamp.c_str(), omp_get_max_threads());
+      config.unknown_behind_sigmas, config.finer_layers, clamp.c_str(), omp_get_max_threads());
   std::fflush(stdout);
   for (const std::string& scene_name : splitList(args.value("scenes", "box,spheres"))) {
     if (scene_name != "box" && scene_name != "spheres") {

@@ -41,6 +41,13 @@ struct PyramidDepthConfig {
   // measured + unknown_behind_sigmas * sigma(measured) for at least one measurement it reads.
   double unknown_behind_sigmas = 3.0;
   int max_pyramid_levels = 12;  // cap on the number of layers M_0 ... M_{L-1}
+  // Not the paper (default 0 is): t_0 = focal length x resolution / 2^finer_layers, so every
+  // voxel reads layers finer_layers levels finer than Eq. 11-12 assign, and each layer keeps
+  // the measurement closest to its halved t_i. With 1 the bilinear stencil of Eq. 15 (two
+  // cells) spans about the voxel's footprint instead of twice it: on surfaces seen at more than
+  // 80 degrees incidence the paper's cells keep depths tens of sigma beyond or in front of the
+  // voxel (docs/depth_method.md, "Grazing incidence"). kPyramid only.
+  int finer_layers = 0;
   DepthMethod method = DepthMethod::kPyramid;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
