@@ -1,5 +1,6 @@
 #include "occupancy_fusion/map/map_files.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -8,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -91,6 +93,23 @@ std::size_t writeTree(const VoxelMap& map, const std::string& path, bool binary)
   return skipped;
 }
 
+// Makes a file's data, or a folder's entries, durable: without it a power cut shortly after a
+// save can leave the renamed file empty on file systems that order metadata before data.
+bool syncToDisk(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return false;
+  const int result = ::fsync(fd);
+  const int error = errno;
+  ::close(fd);
+  errno = error;  // the caller reports fsync's error, not close's
+  return result == 0;
+}
+
+std::string folderOf(const std::string& path) {
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  return folder.empty() ? "." : folder.string();
+}
+
 }  // namespace
 
 void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
@@ -105,9 +124,14 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
     if (!out) throw std::runtime_error("write failed");
     out.close();
     if (out.fail()) throw std::runtime_error("close failed");
+    if (!syncToDisk(temporary)) {
+      throw std::runtime_error(std::string("fsync failed: ") + std::strerror(errno));
+    }
     if (std::rename(temporary.c_str(), path.c_str()) != 0) {
       throw std::runtime_error(std::string("rename failed: ") + std::strerror(errno));
     }
+    // The rename itself: best effort, as some file systems cannot fsync a folder.
+    syncToDisk(folderOf(path));
   } catch (const std::exception& error) {
     std::remove(temporary.c_str());
     throw std::runtime_error("cannot write " + path + ": " + error.what());
