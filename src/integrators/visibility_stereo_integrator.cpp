@@ -183,6 +183,11 @@ std::uint64_t voxelKey(const VoxelIndex& index, const VoxelIndex& origin) {
 // robin-hood table moves its values).
 class FrameUpdates {
  public:
+  void reserve(std::size_t voxels) {
+    slots_.reserve(voxels);
+    entries_.reserve(voxels);
+    occlusions_.reserve(voxels);
+  }
   std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
     const auto [it, inserted] =
         slots_.try_emplace(voxelKey(index, origin), static_cast<std::uint32_t>(entries_.size()));
@@ -580,6 +585,12 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
   const int chunk = std::clamp(count / (8 * threads), 64, 512);
   std::vector<FrameUpdates> per_thread(threads);
+  // Room for the frame's voxels up front: growing the table rehashes every entry several times.
+  // On the Middlebury benchmark a bundled ray adds 5 to 8 voxels of its own.
+  constexpr std::size_t kVoxelsPerRay = 8, kMaxReserved = std::size_t{1} << 16;
+  for (FrameUpdates& updates : per_thread) {
+    updates.reserve(std::min(kVoxelsPerRay * count / threads, kMaxReserved));
+  }
   std::size_t visits = 0, hits = 0, invisible = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : skipped, visits, hits, invisible)
   {
