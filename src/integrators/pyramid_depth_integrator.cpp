@@ -590,9 +590,10 @@ int floorToInt(double x) {
 }  // namespace
 
 // The per-voxel functions below are `inline` (they are private, used in this file only): in a
-// shared library built with -fPIC the compiler may not inline an ordinary member function,
-// since another library could interpose it, so each voxel paid five calls through the PLT and
-// passed LayerCells through memory.
+// shared library built with -fPIC, GCC does not inline an ordinary member function unless
+// -fno-semantic-interposition is given (CMakeLists.txt adds it), since another library could
+// interpose it; each voxel then pays five calls through the PLT and passes LayerCells through
+// memory. `inline` keeps the voxel loop fast in builds without that flag.
 inline bool PyramidDepthIntegrator::projectIntoImage(const CameraIntrinsics& camera,
                                                      const Eigen::Vector3d& point, double* u,
                                                      double* v, double* distance) const {

@@ -251,8 +251,8 @@ class PyramidDepthIntegrator {
   // pixels of the block's footprint: a voxel farther than `reach` is informed by no cell it
   // can read (no update); one nearer than `front` lies more than supportSigmas() in front of
   // every cell it can read, all valid (-infinity where that does not give Eq. 7's constant
-  // exactly). Together they settle most voxels without Eq. 15's gathers (at 0.02 m on 7-Scenes
-  // about 0.4 of those projecting into the image).
+  // exactly). Together they settle voxels without Eq. 15's gathers (on 7-Scenes 14 % of those
+  // projecting into the image at 0.02 m, 35 % at 0.08 m).
   struct CandidateBlock {
     BlockIndex index;
     bool far_in_front = false;
