@@ -19,6 +19,14 @@ std::size_t readMemoryBound(const ParameterSource& source) {
   return static_cast<std::size_t>(megabytes * kBytesPerMebibyte);
 }
 
+BlockStorage readBlockStorage(const ParameterSource& source) {
+  std::string name = "dense";
+  source.get("block_storage", &name);
+  if (name == "dense") return BlockStorage::kDense;
+  if (name == "hybrid") return BlockStorage::kHybrid;
+  throw std::invalid_argument("block_storage must be dense or hybrid, got '" + name + "'");
+}
+
 }  // namespace
 
 OccupancyModel readOccupancyModel(const ParameterSource& source) {
@@ -37,6 +45,7 @@ VoxelMapConfig readVoxelMapConfig(const ParameterSource& source) {
   source.get("resolution", &config.resolution);
   config.model = readOccupancyModel(source);
   config.max_memory_bytes = readMemoryBound(source);
+  config.block_storage = readBlockStorage(source);
   config.validate();
   return config;
 }

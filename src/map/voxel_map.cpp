@@ -14,7 +14,17 @@ constexpr std::size_t kTableSlotBytes = 24;
 
 enum Which { kAnyKnown = 0, kOnlyOccupied = 1, kOnlyFree = 2 };
 
+// Where a sparse block is expanded for an updateBlocks callback: one per thread, so that the
+// callbacks, running in parallel, neither share one nor allocate.
+VoxelBlock& threadScratchBlock() {
+  thread_local VoxelBlock scratch;
+  return scratch;
+}
+
 }  // namespace
+
+// See VoxelMap, "Block storage", and docs/architecture.md for the choice.
+const int VoxelMap::kMaxSparseBricks = BrickLayout::kBrickCount - 1;
 
 void VoxelMapConfig::validate() const {
   if (!(resolution > 0.0) || !std::isfinite(resolution)) {
@@ -59,21 +69,46 @@ VoxelIndex VoxelMap::voxelIndex(const BlockIndex& block, int linear) {
   return block * VoxelBlock::kSide + VoxelBlock::localIndex(linear);
 }
 
-const VoxelBlock* VoxelMap::findBlock(const BlockIndex& block) const {
+const StoredBlock* VoxelMap::findBlock(const BlockIndex& block) const {
   auto it = blocks_.find(packKey(block));
-  return it == blocks_.end() ? nullptr : it->second.get();
+  return it == blocks_.end() ? nullptr : &it->second;
+}
+
+StoredBlock& VoxelMap::storedForWrite(std::uint64_t key) {
+  auto it = blocks_.find(key);
+  if (it == blocks_.end()) {
+    it = blocks_.emplace(key, StoredBlock::newDense()).first;
+    block_bytes_ += it->second.bytes();
+  }
+  StoredBlock& result = it.value();
+  if (result.version() != version_) {
+    result.setVersion(version_);
+    markChanged(key);
+  }
+  return result;
 }
 
 VoxelBlock& VoxelMap::blockForWrite(const BlockIndex& block) {
   const std::uint64_t key = packKey(block);
   auto it = blocks_.find(key);
-  if (it == blocks_.end()) it = blocks_.emplace(key, std::make_unique<VoxelBlock>()).first;
-  VoxelBlock& result = *it.value();
-  if (result.version != version_) {
-    result.version = version_;
-    markChanged(key);
+  const bool first_in_call = it == blocks_.end() || it->second.version() != version_;
+  StoredBlock& stored = storedForWrite(key);
+  if (hybrid() && first_in_call) dense_written_.push_back(key);
+  if (!stored.isDense()) {
+    block_bytes_ -= stored.bytes();
+    stored.makeDense();
+    block_bytes_ += stored.bytes();
   }
-  return result;
+  // The VoxelBlock is on the heap: the reference survives later insertions into the table.
+  return *stored.dense();
+}
+
+void VoxelMap::settleWrittenBlocks() {
+  for (std::uint64_t key : dense_written_) {
+    auto it = blocks_.find(key);
+    if (it != blocks_.end()) block_bytes_ += it.value().settle(kMaxSparseBricks);
+  }
+  dense_written_.clear();
 }
 
 void VoxelMap::markChanged(std::uint64_t key) { change_log_.recordChange(version_, key); }
@@ -81,6 +116,7 @@ void VoxelMap::markChanged(std::uint64_t key) { change_log_.recordChange(version
 void VoxelMap::markRemoved(std::uint64_t key) { change_log_.recordRemoval(version_, key); }
 
 void VoxelMap::finishWrite() {
+  settleWrittenBlocks();
   enforceMemoryBound();
   change_log_.finishWrite();
   ++version_;
@@ -88,9 +124,9 @@ void VoxelMap::finishWrite() {
 
 std::optional<float> VoxelMap::logOdds(const VoxelIndex& index) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  const VoxelBlock* block = findBlock(blockOf(index));
+  const StoredBlock* block = findBlock(blockOf(index));
   if (block == nullptr) return std::nullopt;
-  const float value = block->log_odds[linearIndexInBlock(index)];
+  const float value = block->at(linearIndexInBlock(index));
   if (!VoxelBlock::isKnown(value)) return std::nullopt;
   return value;
 }
@@ -133,12 +169,36 @@ void VoxelMap::updateBlocks(const std::vector<BlockIndex>& blocks,
   std::unique_lock<std::shared_mutex> lock(mutex_);
   // Allocation changes the table, so it happens first and serially; the callbacks then only
   // touch their own block.
-  std::vector<VoxelBlock*> targets;
-  targets.reserve(blocks.size());
-  for (const BlockIndex& block : blocks) targets.push_back(&blockForWrite(block));
   const int count = static_cast<int>(blocks.size());
-#pragma omp parallel for schedule(dynamic, 4)
-  for (int i = 0; i < count; ++i) fn(blocks[i], *targets[i]);
+  std::vector<StoredBlock*> targets(blocks.size());
+  const std::size_t size_before = blocks_.size();
+  for (int i = 0; i < count; ++i) targets[i] = &storedForWrite(packKey(blocks[i]));
+  if (blocks_.size() != size_before) {
+    // An insertion moves the table's entries (robin hood hashing): find them again.
+    for (int i = 0; i < count; ++i) targets[i] = &blocks_.find(packKey(blocks[i])).value();
+  }
+  const bool hybrid = this->hybrid();
+  long long byte_change = 0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : byte_change)
+  for (int i = 0; i < count; ++i) {
+    StoredBlock& stored = *targets[i];
+    if (stored.isDense()) {
+      VoxelBlock& block = *stored.dense();
+      const int known_before = block.known_count;
+      fn(blocks[i], block);
+      // A dense block of a hybrid map has more bricks than a sparse one may (it was settled so),
+      // and a block loses bricks only with known voxels: look again only then, or when new.
+      if (hybrid && (known_before == 0 || block.known_count < known_before)) {
+        byte_change += stored.settle(kMaxSparseBricks);
+      }
+    } else {
+      VoxelBlock& scratch = threadScratchBlock();
+      stored.copyTo(&scratch);
+      fn(blocks[i], scratch);
+      byte_change += stored.storeFrom(scratch, kMaxSparseBricks);
+    }
+  }
+  block_bytes_ = static_cast<std::size_t>(static_cast<long long>(block_bytes_) + byte_change);
   finishWrite();
 }
 
@@ -149,24 +209,34 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
   const BlockIndex block_lo = blockOf(lo);
   const BlockIndex block_hi = blockOf(hi);
   std::size_t changed = 0;
-  for (auto& [key, block_ptr] : blocks_) {
-    const BlockIndex block = unpackKey3(key);
-    if ((block.array() < block_lo.array()).any() || (block.array() > block_hi.array()).any()) {
+  VoxelBlock scratch;
+  for (auto it = blocks_.begin(); it != blocks_.end(); ++it) {
+    const std::uint64_t key = it->first;
+    const BlockIndex block_index = unpackKey3(key);
+    if ((block_index.array() < block_lo.array()).any() ||
+        (block_index.array() > block_hi.array()).any()) {
       continue;
     }
+    StoredBlock& stored = it.value();
+    // A sparse block is cleared in its expanded copy; its bricks stay the same (known voxels
+    // stay known), so it is repacked in place.
+    if (!stored.isDense()) stored.copyTo(&scratch);
+    VoxelBlock& block = stored.isDense() ? *stored.dense() : scratch;
     bool touched = false;
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
-      if (!VoxelBlock::isKnown(block_ptr->log_odds[linear])) continue;
-      const Eigen::Vector3d center = centerOf(voxelIndex(block, linear));
+      if (!VoxelBlock::isKnown(block.log_odds[linear])) continue;
+      const Eigen::Vector3d center = centerOf(voxelIndex(block_index, linear));
       if ((center.array() < min.array()).any() || (center.array() > max.array()).any()) continue;
-      block_ptr->log_odds[linear] = min_log_odds_;
+      block.log_odds[linear] = min_log_odds_;
       touched = true;
       ++changed;
     }
-    if (touched && block_ptr->version != version_) {
-      block_ptr->version = version_;
+    if (!touched) continue;
+    if (block.version != version_) {
+      block.version = version_;
       markChanged(key);
     }
+    if (!stored.isDense()) block_bytes_ += stored.storeFrom(scratch, kMaxSparseBricks);
   }
   finishWrite();
   return changed;
@@ -175,6 +245,7 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
 void VoxelMap::reset() {
   std::unique_lock<std::shared_mutex> lock(mutex_);
   blocks_.clear();
+  block_bytes_ = 0;
   // Consumers holding older versions must rebuild from scratch.
   change_log_.clear(version_ + 1);
   ++version_;
@@ -200,7 +271,9 @@ void VoxelMap::enforceMemoryBound() {
   const std::size_t target = config_.max_memory_bytes / 10 * 9;
   for (const auto& [distance, key] : by_distance) {
     if (storageBytesLocked() <= target) break;
-    blocks_.erase(key);
+    auto it = blocks_.find(key);
+    block_bytes_ -= it->second.bytes();
+    blocks_.erase(it);
     markRemoved(key);
     ++evicted_blocks_;
   }
@@ -208,10 +281,12 @@ void VoxelMap::enforceMemoryBound() {
 
 void VoxelMap::forEachVoxelIf(const VoxelFn& fn, int which) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  for (const auto& [key, block] : blocks_) {
+  VoxelBlock scratch;
+  for (const auto& [key, stored] : blocks_) {
     const BlockIndex block_index = unpackKey3(key);
+    const VoxelBlock& block = stored.view(&scratch);
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
-      const float value = block->log_odds[linear];
+      const float value = block.log_odds[linear];
       if (!VoxelBlock::isKnown(value)) continue;
       const bool occupied = value > threshold_log_odds_;
       if ((which == kOnlyOccupied && !occupied) || (which == kOnlyFree && occupied)) continue;
@@ -232,7 +307,9 @@ void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::V
   std::shared_lock<std::shared_mutex> lock(mutex_);
   const BlockIndex block_lo = blockOf(lo);
   const BlockIndex block_hi = blockOf(hi);
-  auto visit_block = [&](const BlockIndex& block_index, const VoxelBlock& block) {
+  VoxelBlock scratch;
+  auto visit_block = [&](const BlockIndex& block_index, const StoredBlock& stored) {
+    const VoxelBlock& block = stored.view(&scratch);
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       const float value = block.log_odds[linear];
       if (!VoxelBlock::isKnown(value)) continue;
@@ -249,7 +326,7 @@ void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::V
     for (int z = block_lo.z(); z <= block_hi.z(); ++z)
       for (int y = block_lo.y(); y <= block_hi.y(); ++y)
         for (int x = block_lo.x(); x <= block_hi.x(); ++x) {
-          const VoxelBlock* block = findBlock({x, y, z});
+          const StoredBlock* block = findBlock({x, y, z});
           if (block != nullptr) visit_block({x, y, z}, *block);
         }
     return;
@@ -261,7 +338,7 @@ void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::V
         (block_index.array() > block_hi.array()).any()) {
       continue;
     }
-    visit_block(block_index, *block);
+    visit_block(block_index, block);
   }
 }
 
@@ -289,22 +366,30 @@ VoxelCounts VoxelMap::countInBox(const Eigen::Vector3d& min, const Eigen::Vector
 void VoxelMap::forEachBlock(
     const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  for (const auto& [key, block] : blocks_) fn(unpackKey3(key), *block);
+  VoxelBlock scratch;
+  for (const auto& [key, stored] : blocks_) fn(unpackKey3(key), stored.view(&scratch));
 }
 
 std::vector<VoxelMap::BlockCopy> VoxelMap::copyBlocks() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   std::vector<BlockCopy> copies;
   copies.reserve(blocks_.size());
-  for (const auto& [key, block] : blocks_) copies.emplace_back(unpackKey3(key), *block);
+  for (const auto& [key, stored] : blocks_) {
+    if (stored.isDense()) {
+      copies.emplace_back(unpackKey3(key), *stored.dense());
+    } else {
+      copies.emplace_back(unpackKey3(key), VoxelBlock());
+      stored.copyTo(&copies.back().second);
+    }
+  }
   return copies;
 }
 
 bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  const VoxelBlock* found = findBlock(block);
+  const StoredBlock* found = findBlock(block);
   if (found == nullptr) return false;
-  *out = *found;
+  found->copyTo(out);
   return true;
 }
 
@@ -335,12 +420,12 @@ std::size_t VoxelMap::blockCount() const {
 std::size_t VoxelMap::knownVoxelCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   std::size_t count = 0;
-  for (const auto& entry : blocks_) count += static_cast<std::size_t>(entry.second->known_count);
+  for (const auto& entry : blocks_) count += static_cast<std::size_t>(entry.second.knownCount());
   return count;
 }
 
 std::size_t VoxelMap::storageBytesLocked() const {
-  return blocks_.size() * sizeof(VoxelBlock) + blocks_.bucket_count() * kTableSlotBytes;
+  return block_bytes_ + blocks_.bucket_count() * kTableSlotBytes;
 }
 
 std::size_t VoxelMap::memoryBytesLocked() const {
@@ -350,6 +435,24 @@ std::size_t VoxelMap::memoryBytesLocked() const {
 std::size_t VoxelMap::memoryBytes() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   return memoryBytesLocked();
+}
+
+VoxelMap::StorageStats VoxelMap::storageStats() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  StorageStats stats;
+  for (const auto& entry : blocks_) {
+    const StoredBlock& stored = entry.second;
+    if (stored.isDense()) {
+      ++stats.dense_blocks;
+    } else {
+      ++stats.sparse_blocks;
+      stats.sparse_bricks += static_cast<std::size_t>(stored.brickCount());
+    }
+  }
+  stats.block_bytes = block_bytes_;
+  stats.table_bytes = blocks_.bucket_count() * kTableSlotBytes;
+  stats.change_log_bytes = change_log_.memoryBytes();
+  return stats;
 }
 
 std::size_t VoxelMap::evictedBlockCount() const {

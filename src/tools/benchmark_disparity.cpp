@@ -326,6 +326,8 @@ struct MapContents {
   std::size_t occupied_voxels = 0;
   std::size_t all_free_blocks = 0;  // blocks whose known voxels are all free
   std::uint64_t checksum = 0;
+  VoxelMap::StorageStats storage;  // dense and sparse blocks, their bytes, table, change log
+  const char* block_storage = "";  // the map's VoxelMapConfig::block_storage
 };
 
 MapContents mapContents(const VoxelMap& map) {
@@ -359,6 +361,9 @@ MapContents mapContents(const VoxelMap& map) {
     mix(bits);
   }
   contents.checksum = hash;
+  contents.storage = map.storageStats();
+  contents.block_storage =
+      map.config().block_storage == BlockStorage::kHybrid ? "hybrid" : "dense";
   return contents;
 }
 
@@ -490,6 +495,7 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
   const std::vector<octomap::Pointcloud> clouds = octomapClouds(view, poses, integrator);
   VoxelMapConfig map_config;
   map_config.resolution = resolution;
+  map_config.block_storage = BlockStorage::kHybrid;  // as config/disparity_mapper.yaml
   CaseResult result;
   result.scene = view.scene;
   result.source = view.source;
@@ -572,19 +578,23 @@ void printCase(const char* prefix, const CaseResult& c) {
   // The blocks alone, without the hash table and VoxelMap's change log (which memoryBytes()
   // includes and which grows with every frame's written blocks, up to its cap): the part
   // comparable with OcTree::memoryUsage(), which counts the tree's nodes only.
-  const double block_storage = static_cast<double>(m.blocks * sizeof(VoxelBlock));
+  const double block_storage = static_cast<double>(m.storage.block_bytes);
   std::printf(
       "%smap scene=%s source=%s resolution=%g input=%s blocks=%zu block_bytes=%zu "
       "known_voxels=%zu known_per_block=%.1f occupied_voxels=%zu all_free_blocks=%zu "
-      "octomap_nodes=%zu octomap_leaves=%zu block_storage_kb=%.0f block_storage_ratio=%.3f "
+      "octomap_nodes=%zu octomap_leaves=%zu block_storage=%s dense_blocks=%zu sparse_blocks=%zu "
+      "sparse_bricks=%zu block_storage_kb=%.1f block_storage_ratio=%.3f table_kb=%.1f "
+      "change_log_kb=%.1f "
       "voxel_visits_per_frame=%.0f rays_per_frame=%.0f walk_only_cpu_ms_per_frame=%.2f "
       "walk_only_steps_per_frame=%.0f "
       "checksum=%016llx\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
       sizeof(VoxelBlock), m.known_voxels,
       m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
-      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, block_storage / 1024.0,
-      block_storage / c.plain.memory_bytes, c.ours.voxel_visits_per_frame, c.ours.rays_per_frame,
+      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, m.block_storage,
+      m.storage.dense_blocks, m.storage.sparse_blocks, m.storage.sparse_bricks,
+      block_storage / 1024.0, block_storage / c.plain.memory_bytes,
+      m.storage.table_bytes / 1024.0, m.storage.change_log_bytes / 1024.0, c.ours.voxel_visits_per_frame, c.ours.rays_per_frame,
       c.walk_only.cpu_ms_per_frame, c.walk_only.steps_per_frame,
       static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
@@ -627,6 +637,7 @@ void drawPicture(const StereoView& view, const StereoView& truth, const Options&
       framePoses(options.frames + options.warmup, 0.0, 0.0);
   VoxelMapConfig map_config;
   map_config.resolution = options.picture_resolution;
+  map_config.block_storage = BlockStorage::kHybrid;
   VoxelMap map(map_config);
   runOurs(view, poses, integrator, &map);
   octomap::OcTree tree = makeTree(options.picture_resolution);

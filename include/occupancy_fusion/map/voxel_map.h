@@ -18,57 +18,26 @@
 #include "occupancy_fusion/map/block_change_log.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
+#include "occupancy_fusion/map/stored_block.h"
+#include "occupancy_fusion/map/voxel_block.h"
 
 namespace occupancy_fusion {
 
 using VoxelIndex = Eigen::Vector3i;  // floor(p / resolution), per axis
 using BlockIndex = Eigen::Vector3i;  // floor(voxel index / VoxelBlock::kSide), per axis
 
-// A dense cube of kSide^3 voxels. NaN log-odds marks a voxel that was never observed.
-struct VoxelBlock {
-  static constexpr int kSideLog2 = 3;
-  static constexpr int kSide = 1 << kSideLog2;
-  static constexpr int kVolume = kSide * kSide * kSide;
-  static constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
-
-  VoxelBlock() { log_odds.fill(kUnknown); }
-
-  // x fastest, so a sweep along x walks memory in order.
-  static int linearIndex(int x, int y, int z) { return x + kSide * (y + kSide * z); }
-  static int linearIndex(const Eigen::Vector3i& local) {
-    return linearIndex(local.x(), local.y(), local.z());
-  }
-  static Eigen::Vector3i localIndex(int linear) {
-    return {linear & (kSide - 1), (linear >> kSideLog2) & (kSide - 1), linear >> (2 * kSideLog2)};
-  }
-  static bool isKnown(float value) { return !std::isnan(value); }
-
-  // Adds delta to one voxel (an unknown voxel starts at the prior, 0) and clamps to
-  // [min_log_odds, max_log_odds] (VoxelMap::minLogOdds(), maxLogOdds()).
-  void update(int linear, float delta, float min_log_odds, float max_log_odds) {
-    float& value = log_odds[linear];
-    float sum = delta;
-    if (isKnown(value)) {
-      sum += value;
-    } else {
-      ++known_count;
-    }
-    value = sum < min_log_odds ? min_log_odds : (sum > max_log_odds ? max_log_odds : sum);
-  }
-  void set(int linear, float value) {
-    if (isKnown(value) != isKnown(log_odds[linear])) known_count += isKnown(value) ? 1 : -1;
-    log_odds[linear] = value;
-  }
-
-  std::array<float, kVolume> log_odds;
-  int known_count = 0;
-  std::uint64_t version = 0;  // map version of the last write; maintained by VoxelMap
+// How blocks are stored (see VoxelMap, "Block storage"; parameter block_storage). Either way the
+// map's contents, as every read and write function sees them, are the same bit for bit.
+enum class BlockStorage {
+  kDense,   // every block a VoxelBlock
+  kHybrid,  // a block with few non-empty bricks keeps only those: less memory, a little more CPU
 };
 
 struct VoxelMapConfig {
   double resolution = 0.05;          // m, edge of a voxel
   OccupancyModel model;              // hit/miss/clamping
   std::size_t max_memory_bytes = 0;  // 0: unbounded. See VoxelMap's memory bound.
+  BlockStorage block_storage = BlockStorage::kDense;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -100,6 +69,14 @@ struct VoxelCounts {
 // (OpenMP), each on a different block, while the caller's exclusive lock is held. Callbacks of
 // forEach* run under the shared lock: they must not call back into the map's write functions.
 //
+// Block storage: a block is held dense (a VoxelBlock, 2 KB) or, with BlockStorage::kHybrid,
+// sparse: only its 2^3-voxel bricks that hold a known voxel (stored_block.h). Every interface
+// that hands out a VoxelBlock (updateBlocks, forEachBlock, copyBlock(s)) gives a dense one, a
+// sparse block expanded for the call. After each write call, a block it wrote is stored sparse
+// when at least one of its 64 bricks is empty (kMaxSparseBricks), else dense: a thin surface
+// (stereo) fills a few bricks of each block, while a block of free space (depth, point clouds)
+// stays dense and is looked at again only when it loses known voxels.
+//
 // Memory bound: after each write call, if the voxel storage (blocks and hash table) exceeds
 // max_memory_bytes, the blocks
 // farthest from the focus (the last sensor origin given to setFocus) are dropped, their voxels
@@ -108,6 +85,10 @@ struct VoxelCounts {
 class VoxelMap {
  public:
   explicit VoxelMap(const VoxelMapConfig& config);  // validates config
+
+  // With BlockStorage::kHybrid, a written block is stored sparse while it has at most this many
+  // non-empty bricks (of BrickLayout::kBrickCount).
+  static const int kMaxSparseBricks;
 
   const VoxelMapConfig& config() const { return config_; }
   double resolution() const { return config_.resolution; }
@@ -173,12 +154,26 @@ class VoxelMap {
   std::size_t knownVoxelCount() const;
   std::size_t memoryBytes() const;  // blocks, hash table and change log
   std::size_t evictedBlockCount() const;
+  struct StorageStats {
+    std::size_t dense_blocks = 0;
+    std::size_t sparse_blocks = 0;
+    std::size_t sparse_bricks = 0;  // non-empty bricks held by the sparse blocks
+    std::size_t block_bytes = 0;    // heap bytes of all blocks (allocated, not only used)
+    std::size_t table_bytes = 0;    // the block hash table
+    std::size_t change_log_bytes = 0;
+  };
+  StorageStats storageStats() const;
 
  private:
-  using BlockTable = SpatialKeyMap<std::unique_ptr<VoxelBlock>>;  // keyed by packKey(block)
+  using BlockTable = SpatialKeyMap<StoredBlock>;  // keyed by packKey(block)
 
-  VoxelBlock& blockForWrite(const BlockIndex& block);  // allocates; caller holds unique lock
-  const VoxelBlock* findBlock(const BlockIndex& block) const;
+  // Allocates (dense), stamps the version and logs the change; caller holds the unique lock.
+  StoredBlock& storedForWrite(std::uint64_t key);
+  // The same, stored dense until finishWrite() settles it (for per-voxel writes).
+  VoxelBlock& blockForWrite(const BlockIndex& block);
+  const StoredBlock* findBlock(const BlockIndex& block) const;
+  bool hybrid() const { return config_.block_storage == BlockStorage::kHybrid; }
+  void settleWrittenBlocks();
   void markChanged(std::uint64_t key);
   void markRemoved(std::uint64_t key);
   void finishWrite();  // bumps the version, enforces the memory bound
@@ -198,6 +193,8 @@ class VoxelMap {
   std::uint64_t version_ = 1;
   std::size_t evicted_blocks_ = 0;
   BlockChangeLog change_log_;
+  std::size_t block_bytes_ = 0;               // sum of the blocks' bytes()
+  std::vector<std::uint64_t> dense_written_;  // blockForWrite's blocks, settled by finishWrite
 };
 
 }  // namespace occupancy_fusion

@@ -163,9 +163,11 @@ TEST(FusedGrid, ResamplesFinerAndCoarserLayersByArea) {
 
 // Random writes, clears, resets, evictions and layer swaps: after each step the incremental view
 // must equal the reference, and it must not rebuild from scratch unless the log says so.
-void runRandomSequence(double layer_resolution, std::size_t map_memory_bound, unsigned seed) {
+void runRandomSequence(double layer_resolution, std::size_t map_memory_bound, unsigned seed,
+                       BlockStorage storage = BlockStorage::kHybrid) {
   VoxelMapConfig config = mapConfig(0.1);
   config.max_memory_bytes = map_memory_bound;
+  config.block_storage = storage;
   VoxelMap map(config);
   GridLayer2D layer(layerConfig(layer_resolution));
   const FusedGridConfig band_config = band(-0.3, 0.45);
@@ -228,7 +230,9 @@ TEST(FusedGrid, IncrementalEqualsReferenceAlignedLayer) { runRandomSequence(0.1,
 TEST(FusedGrid, IncrementalEqualsReferenceFinerUnalignedLayer) { runRandomSequence(0.07, 0, 2); }
 TEST(FusedGrid, IncrementalEqualsReferenceCoarserLayer) { runRandomSequence(0.25, 0, 3); }
 TEST(FusedGrid, IncrementalEqualsReferenceWithEvictions) {
-  runRandomSequence(0.1, 60 * sizeof(VoxelBlock), 4);
+  runRandomSequence(0.1, 60 * sizeof(VoxelBlock), 4, BlockStorage::kDense);
+  // Scattered updates leave most blocks sparse, at a fraction of a dense block's bytes.
+  runRandomSequence(0.1, 10 * sizeof(VoxelBlock), 4, BlockStorage::kHybrid);
 }
 
 TEST(FusedGrid, UpdateTouchesOnlyChangedBlocks) {

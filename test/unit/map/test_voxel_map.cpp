@@ -223,7 +223,9 @@ TEST(VoxelMap, UpdateBlocksRunsOncePerBlockAndAllocatesThem) {
 }
 
 TEST(VoxelMap, MemoryAccountingGrowsWithBlocks) {
-  VoxelMap map(defaultConfig());
+  VoxelMapConfig config = defaultConfig();
+  config.block_storage = BlockStorage::kDense;  // sparse blocks: test_voxel_map_storage.cpp
+  VoxelMap map(config);
   map.updateVoxel({0, 0, 0}, 1.0f);
   const std::size_t one_block = map.memoryBytes();
   EXPECT_GE(one_block, sizeof(VoxelBlock));
@@ -235,6 +237,7 @@ TEST(VoxelMap, MemoryAccountingGrowsWithBlocks) {
 
 TEST(VoxelMap, MemoryBoundEvictsBlocksFarthestFromTheFocus) {
   VoxelMapConfig config = defaultConfig(0.1);
+  config.block_storage = BlockStorage::kDense;  // in units of dense blocks
   config.max_memory_bytes = 60 * sizeof(VoxelBlock);
   VoxelMap map(config);
   map.setFocus({0.0, 0.0, 0.0});
@@ -285,6 +288,7 @@ TEST(VoxelMap, ChangeLogReportsWrittenAndRemovedBlocks) {
 
 TEST(VoxelMap, EvictionIsReportedAsRemoval) {
   VoxelMapConfig config = defaultConfig(0.1);
+  config.block_storage = BlockStorage::kDense;  // in units of dense blocks
   config.max_memory_bytes = 20 * sizeof(VoxelBlock);
   VoxelMap map(config);
   const std::uint64_t start = map.changesSince(0).version;

@@ -3,7 +3,8 @@
 // blocks farthest from the focus down to 90 % of the bound, incremental consumers (the change log,
 // the fused 2D view the MapServer publishes) drop the evicted blocks, and the cost of a frame
 // stays flat. Only the public API is used, in units of VoxelBlock, so the test holds for any
-// VoxelBlock::kSide.
+// VoxelBlock::kSide; the blocks are stored dense (eviction of sparse blocks:
+// test_voxel_map_storage.cpp).
 #include <gtest/gtest.h>
 
 #include <time.h>
@@ -72,6 +73,7 @@ TEST(VoxelMapMemoryBound, MovingSensorEvictsFarthestBlocksAndStaysFlat) {
   constexpr int kCheckGridEvery = 5;
   VoxelMapConfig config;
   config.resolution = 0.1;
+  config.block_storage = BlockStorage::kDense;
   config.max_memory_bytes = kBoundBlocks * sizeof(VoxelBlock);
   VoxelMap map(config);
   const double block_edge = config.resolution * VoxelBlock::kSide;
