@@ -301,19 +301,31 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
     ray_x2[u] = camera.pixelRay(u, 0).x() * camera.pixelRay(u, 0).x();
   const int stride = depth.row_stride > 0 ? depth.row_stride : depth.width;
   const bool parallel = static_cast<long>(camera.width) * camera.height >= kParallelPixels;
-#pragma omp parallel for schedule(static) if (parallel)
-  for (int v = 0; v < camera.height; ++v) {
-    const double ray_y = camera.pixelRay(0, v).y();
-    const double ray_y2 = ray_y * ray_y;
-    const float* depth_row = depth.depth + static_cast<std::size_t>(v) * stride;
-    float* row = &distances.cells[static_cast<std::size_t>(v) * camera.width];
-    for (int u = 0; u < camera.width; ++u) {
-      const float z = depth_row[u];
-      const double measured = z * std::sqrt(ray_x2[u] + ray_y2 + 1.0);
-      // Invalid: z <= 0, NaN, infinite, or beyond max_range (NaN compares false).
-      row[u] = z > 0.0f && measured <= max_range ? static_cast<float>(measured) : kNaN;
+  float farthest = 0.0f;  // valid distances are > 0
+#pragma omp parallel if (parallel) reduction(max : farthest)
+  {
+    // The farthest distance (firstReadLevel) in the same pass, per column while the row is in
+    // cache (elementwise, so it vectorises), instead of a second pass over M.
+    std::vector<float> column_farthest(static_cast<std::size_t>(camera.width), 0.0f);
+#pragma omp for schedule(static)
+    for (int v = 0; v < camera.height; ++v) {
+      const double ray_y = camera.pixelRay(0, v).y();
+      const double ray_y2 = ray_y * ray_y;
+      const float* depth_row = depth.depth + static_cast<std::size_t>(v) * stride;
+      float* row = &distances.cells[static_cast<std::size_t>(v) * camera.width];
+      for (int u = 0; u < camera.width; ++u) {
+        const float z = depth_row[u];
+        const double measured = z * std::sqrt(ray_x2[u] + ray_y2 + 1.0);
+        // Invalid: z <= 0, NaN, infinite, or beyond max_range (NaN compares false).
+        row[u] = z > 0.0f && measured <= max_range ? static_cast<float>(measured) : kNaN;
+      }
+      for (int u = 0; u < camera.width; ++u) {
+        column_farthest[u] = row[u] > column_farthest[u] ? row[u] : column_farthest[u];
+      }
     }
+    for (float value : column_farthest) farthest = std::max(farthest, value);
   }
+  farthest_ = farthest;
   for (int level = 1; level < this->levels(); ++level) sizeLayer(level);
   if (selection == PyramidSelection::kMinimum) {
     buildMinimumLayers();
@@ -368,18 +380,10 @@ void DistancePyramid::buildMinimumLayers() {
 
 int DistancePyramid::firstReadLevel(const std::function<double(double)>& reach_of_farthest) const {
   if (!reach_of_farthest) return 0;
-  const std::vector<float>& distances = layers_[0].cells;
-  const long pixels = static_cast<long>(distances.size());
-  float farthest = 0.0f;  // valid distances are > 0
-  // On both threads: a serial pass over M held the second thread idle (5 % of a frame at 0.08 m).
-#pragma omp parallel for schedule(static) reduction(max : farthest) if (pixels >= kParallelPixels)
-  for (long i = 0; i < pixels; ++i) {
-    farthest = distances[i] > farthest ? distances[i] : farthest;  // NaN drops out
-  }
-  if (farthest == 0.0f) return levels();  // no valid pixel: no layer is read
+  if (farthest_ == 0.0f) return levels();  // no valid pixel: no layer is read
   // A voxel is read at its bracketing level i (t_{i+1} < distance <= t_i) and i + 1; no voxel
   // farther than the reach is informed, so the nearest informed voxels decide (Eq. 12).
-  const double reach = reach_of_farthest(farthest);
+  const double reach = reach_of_farthest(farthest_);
   int level = 0;
   while (level + 1 < levels() && reach <= threshold(level + 1)) ++level;
   return level;

@@ -144,6 +144,7 @@ class DistancePyramid {
   std::vector<double> scales_;      // 2^-i per layer, read for every voxel
   std::vector<double> inverse_gaps_;
   std::vector<Layer> layers_;  // layers_[0] is M itself
+  float farthest_ = 0.0f;      // the farthest valid distance of M; 0: none valid
 };
 
 // One depth image prepared for per-voxel queries at one map resolution.
