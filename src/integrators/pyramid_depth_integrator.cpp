@@ -897,8 +897,6 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
   std::vector<char> all_valid(tile_count, 1);
   // Slightly nearer than Eq. 7's support, so rounding cannot claim a voxel it would not give.
   constexpr double kFrontSafety = 1e-6;  // m
-  // Likewise beyond the float-rounded reach (its rounding error is below 1e-6 m within 10 m).
-  constexpr float kReachSafety = 1e-5f;  // m
   // From each tile's nearest and farthest measurement: reach grows with the measurement, and
   // front = measured - supportSigmas() sigma(measured) is at least nearest - supportSigmas()
   // sigma(farthest) (exact for constant sigma). Branch-free min / max passes; NaN (invalid)
@@ -993,9 +991,12 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
     CandidateBlock candidate;
     candidate.index = block;
     candidate.far_in_front = footprint_valid && distance + radius < footprint_front;
-    candidate.reach = footprint_reach + kReachSafety;
+    // One float step outwards: the tiles hold float-rounded bounds of double ones, at any range.
+    candidate.reach = std::nextafter(footprint_reach, std::numeric_limits<float>::infinity());
     // Per voxel only where the far-in-front branch of Eq. 15-17 gives the constant exactly.
-    if (footprint_valid && !table_.empty()) candidate.front = footprint_front;
+    if (footprint_valid && !table_.empty()) {
+      candidate.front = std::nextafter(footprint_front, -std::numeric_limits<float>::infinity());
+    }
     return candidate;
   };
 
