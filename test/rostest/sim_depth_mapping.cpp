@@ -340,8 +340,12 @@ TEST(SimDepthMapping, BadFramesLeaveTheMapUnchanged) {
       node_handle.advertise<sensor_msgs::CameraInfo>("camera/depth/camera_info", 5);
   const sensor_msgs::CameraInfo::ConstPtr info = g_observer->latestInfo();
   ASSERT_TRUE(info);
-  ASSERT_TRUE(waitUntil([&] { return image_pub.getNumSubscribers() > 0; }, 5.0));
-  ros::WallDuration(0.5).sleep();  // the mapper's info subscription connects too
+  // The test's own Observer subscribes to both topics (an intra-process link, counted at once):
+  // the DepthMapper is connected when a second subscriber is.
+  ASSERT_TRUE(waitUntil(
+      [&] { return image_pub.getNumSubscribers() >= 2 && info_pub.getNumSubscribers() >= 2; },
+      10.0))
+      << "the DepthMapper did not connect to the test's publishers";
   const Observer::Counters before = g_observer->counters();
   const ros::WallTime map_time_before = g_observer->latestMap().second;
 
