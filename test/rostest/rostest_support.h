@@ -33,6 +33,27 @@ inline bool waitUntil(const std::function<bool()>& condition, double timeout_sec
   return condition();
 }
 
+// Waits until `count` (a counter the mappers report in their 1 Hz diagnostics) kept its value
+// for `quiet_seconds` of wall time, so that what was in flight has been processed and reported;
+// whether it did within the timeout. `*settled` gets the last value.
+inline bool waitUntilSteady(const std::function<std::size_t()>& count, double quiet_seconds,
+                            double timeout_seconds, std::size_t* settled) {
+  std::size_t last = count();
+  ros::WallTime stable_since = ros::WallTime::now();
+  const bool steady = waitUntil(
+      [&] {
+        const std::size_t now = count();
+        if (now != last) {
+          last = now;
+          stable_since = ros::WallTime::now();
+        }
+        return ros::WallTime::now() - stable_since > ros::WallDuration(quiet_seconds);
+      },
+      timeout_seconds);
+  *settled = last;
+  return steady;
+}
+
 // Stops (true) or resumes (false) the Simulator's robot and sensors through /simulator/pause.
 inline bool setSimulatorPaused(bool paused) {
   std_srvs::SetBool pause;

@@ -163,7 +163,12 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
 
 TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
   ASSERT_TRUE(setSimulatorPaused(true));
-  ros::WallDuration(2.0).sleep();  // images in flight integrated, counters published
+  // Images in flight integrated and reported: the count kept still over two diagnostics periods.
+  std::size_t settled = 0;
+  ASSERT_TRUE(
+      waitUntilSteady([] { return g_observer->counters().integrated; }, 2.5, 20.0, &settled));
+  ASSERT_TRUE(waitUntil([] { return g_disparity_publisher->getNumSubscribers() > 0; }, 10.0))
+      << "the DisparityMapper did not subscribe to the test's images";
   const MapperCounters before = g_observer->counters();
   ASSERT_GT(before.integrated, 0u);
 

@@ -126,9 +126,16 @@ TEST(SimLaserMapping, BothProductsMatchGroundTruth) {
       << "front " << g_observer->state().front_integrated << ", rear "
       << g_observer->state().rear_integrated << " scans integrated";
   ASSERT_TRUE(setSimulatorPaused(true));
-  // Scans in flight are integrated and published; then both products stay as they are (the
-  // local grid is re-fused from the same latest scans).
-  ros::WallDuration(2.0).sleep();
+  // Scans in flight are integrated and published (the counts kept still over two diagnostics
+  // periods); then both products stay as they are (the local grid is re-fused from the same
+  // latest scans).
+  std::size_t settled = 0;
+  ASSERT_TRUE(waitUntilSteady(
+      [] {
+        const auto s = g_observer->state();
+        return s.front_integrated + s.rear_integrated;
+      },
+      2.5, 20.0, &settled));
   g_frozen = g_observer->state();
 
   // Local grid: in base_link, placed in the world by the robot's pose at the grid's stamp (the

@@ -204,8 +204,10 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
       60.0))
       << "only " << g_observer->cloudsIntegrated() << " clouds integrated";
   ASSERT_TRUE(setSimulatorPaused(true));
-  // Let clouds in flight be integrated and published; then the map stays as it is.
-  ros::WallDuration(1.5).sleep();
+  // Let clouds in flight be integrated and published (the count kept still over two diagnostics
+  // periods); then the map stays as it is, and the files saved below must hold exactly it.
+  std::size_t settled = 0;
+  ASSERT_TRUE(waitUntilSteady([] { return g_observer->cloudsIntegrated(); }, 2.5, 20.0, &settled));
   g_final = g_observer->snapshot();
   ASSERT_TRUE(g_final.grid && g_final.markers && g_final.cloud);
 

@@ -175,8 +175,19 @@ TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
     rates[mapper.task] = number(observer.diagnostics(mapper.task), "input rate (Hz)");
   }
   ASSERT_TRUE(setSimulatorPaused(true));
-  // Let every queued frame through and the map server publish the last of them.
-  ros::WallDuration(3.0).sleep();
+  // Let every queued frame through (the mappers' outcome counts kept still over two diagnostics
+  // periods) and the map server publish the last of them.
+  std::size_t settled = 0;
+  ASSERT_TRUE(waitUntilSteady(
+      [&] {
+        std::size_t outcomes = 0;
+        for (const MapperUnderTest& mapper : kMappers) {
+          const Values values = observer.diagnostics(mapper.task);
+          outcomes += count(values, "frames integrated") + count(values, "frames dropped");
+        }
+        return outcomes;
+      },
+      2.5, 20.0, &settled));
 
   for (const MapperUnderTest& mapper : kMappers) {
     SCOPED_TRACE(mapper.task);
