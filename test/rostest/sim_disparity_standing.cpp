@@ -2,8 +2,12 @@
 // with Table I's defaults: unknown space occludes partly (Eq. 1 with P(O) = 0.5), so every frame
 // maps a few voxels deeper (Fig. 5a) until the visible surfaces are reached. The test records the
 // map after every published update, reports the frames needed, and checks the final occupied
-// voxels against the room scene's analytic surfaces.
+// voxels against the room scene's analytic surfaces. The count starts from an empty map (the
+// simulator paused, the map reset), not from whatever the map held when this node came up: a
+// test node started late under load would otherwise see a latched map already grown.
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -13,6 +17,7 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Empty.h>
 
 #include "occupancy_fusion/sim/scenes.h"
 #include "rostest_support.h"
@@ -83,11 +88,46 @@ std::size_t nearSurface(const sim::Scene& scene, const std::vector<Eigen::Vector
 }
 
 TEST(SimDisparityStanding, VisibilityMethodMapsTheVisibleSurfacesAfterEnoughFrames) {
-  ASSERT_TRUE(
-      waitUntil([] { return g_recorder->integrated() >= std::size_t(g_settings.images); }, 60.0))
-      << "only " << g_recorder->integrated() << " disparity images integrated";
-  ros::WallDuration(1.0).sleep();  // the last update published
-  const std::vector<Snapshot> snapshots = g_recorder->snapshots();
+  // Start from an empty map with the camera where it stands: pause, let the images in flight
+  // through, reset the map and wait for the MapServer's empty cloud (a cloud of the old map
+  // published while the reset ran would otherwise count as the first update).
+  // (Some voxels mapped first, so that the reset changes the map and an empty cloud follows.)
+  ASSERT_TRUE(waitUntil(
+      [] {
+        const std::vector<Snapshot> all = g_recorder->snapshots();
+        return !all.empty() && !all.back().centres.empty();
+      },
+      30.0))
+      << "the mapper mapped nothing";
+  ASSERT_TRUE(setSimulatorPaused(true));
+  const auto integrated = [] { return g_recorder->integrated(); };
+  std::size_t baseline = 0;
+  ASSERT_TRUE(waitUntilSteady(integrated, 2.5, 20.0, &baseline));
+  const std::size_t before_reset = g_recorder->snapshots().size();
+  std_srvs::Empty reset;
+  ASSERT_TRUE(ros::service::call("/map_server/reset", reset));
+  std::size_t first = 0;
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        const std::vector<Snapshot> all = g_recorder->snapshots();
+        for (first = before_reset; first < all.size(); ++first) {
+          if (all[first].centres.empty()) return true;
+        }
+        return false;
+      },
+      10.0))
+      << "no empty cloud after the reset";
+  ASSERT_TRUE(setSimulatorPaused(false));
+  ASSERT_TRUE(waitUntil(
+      [&] { return g_recorder->integrated() >= baseline + std::size_t(g_settings.images); }, 40.0))
+      << "only " << g_recorder->integrated() - baseline << " disparity images integrated";
+  ASSERT_TRUE(setSimulatorPaused(true));
+  // 2.5 s without a new image: ten MapServer cycles (4 Hz) sent the last update.
+  std::size_t final_count = 0;
+  ASSERT_TRUE(waitUntilSteady(integrated, 2.5, 20.0, &final_count));
+  std::vector<Snapshot> snapshots = g_recorder->snapshots();
+  snapshots.erase(snapshots.begin(), snapshots.begin() + static_cast<std::ptrdiff_t>(first));
+  for (Snapshot& snapshot : snapshots) snapshot.images -= std::min(snapshot.images, baseline);
   ASSERT_FALSE(snapshots.empty());
   const sim::Scene scene = sim::makeRoomScene();
   const std::vector<Eigen::Vector3d>& final_centres = snapshots.back().centres;
