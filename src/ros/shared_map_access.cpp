@@ -26,12 +26,17 @@ std::shared_ptr<SharedMap> acquireSharedMap(const ParameterSource& parameters,
            map->name().c_str(), map->frameId().c_str(), map->voxels().resolution());
   const VoxelMapConfig& existing = map->config().voxels;
   if (!sameModel(existing.model, wanted.voxels.model) ||
-      existing.max_memory_bytes != wanted.voxels.max_memory_bytes ||
-      existing.block_storage != wanted.voxels.block_storage) {
+      existing.max_memory_bytes != wanted.voxels.max_memory_bytes) {
     ROS_WARN(
-        "%s: sensor_model/*, max_memory_mb or block_storage differ from those of the shared map "
-        "'%s', which keeps the settings of the nodelet that created it",
+        "%s: sensor_model/* or max_memory_mb differ from those of the shared map '%s', "
+        "which keeps the settings of the nodelet that created it",
         nodelet_name.c_str(), map->name().c_str());
+  }
+  // The storage changes the memory only, never a voxel: worth a note, not a warning.
+  if (existing.block_storage != wanted.voxels.block_storage) {
+    ROS_INFO("%s: the shared map '%s' keeps block_storage '%s' of the nodelet that created it",
+             nodelet_name.c_str(), map->name().c_str(),
+             existing.block_storage == BlockStorage::kHybrid ? "hybrid" : "dense");
   }
   return map;
 }
