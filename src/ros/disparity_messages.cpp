@@ -8,6 +8,7 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#include "occupancy_fusion/ros/camera_info_message.h"
 #include "occupancy_fusion/ros/image_bytes.h"
 
 namespace occupancy_fusion {
@@ -110,15 +111,14 @@ stereo_msgs::DisparityImage disparityImageMessage(const std::vector<float>& disp
 }
 
 sensor_msgs::CameraInfo leftCameraInfoMessage(const StereoCamera& camera, int width, int height) {
-  sensor_msgs::CameraInfo info;
-  info.width = static_cast<std::uint32_t>(width);
-  info.height = static_cast<std::uint32_t>(height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
-  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-  info.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
-  return info;
+  CameraIntrinsics left;
+  left.width = width;
+  left.height = height;
+  left.fx = camera.fx;
+  left.fy = camera.fy;
+  left.cx = camera.cx;
+  left.cy = camera.cy;
+  return cameraInfoMessage(left, "", ros::Time());
 }
 
 }  // namespace occupancy_fusion
