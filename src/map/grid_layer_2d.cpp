@@ -121,8 +121,34 @@ void GridLayer2D::addRaster(const CellIndex& origin_cell, int width, int height,
   if (width < 0 || height < 0) {
     throw std::invalid_argument("GridLayer2D::addRaster: negative window size");
   }
-  if (width == 0 || height == 0) return;
   std::unique_lock<std::shared_mutex> lock(mutex_);
+  forEachWindowValue(origin_cell, width, height, log_odds_delta,
+                     [this](GridTile* tile, int linear, float delta) {
+                       tile->update(linear, delta, min_log_odds_, max_log_odds_);
+                     });
+  finishWrite();
+}
+
+void GridLayer2D::importRaster(const LogOddsRaster& raster) {
+  if (std::abs(raster.resolution - config_.resolution) > 1e-9 * config_.resolution) {
+    throw std::invalid_argument("GridLayer2D::importRaster: the raster's resolution " +
+                                std::to_string(raster.resolution) + " m differs from the layer's " +
+                                std::to_string(config_.resolution) + " m");
+  }
+  if (raster.width < 0 || raster.height < 0 ||
+      raster.data.size() != static_cast<std::size_t>(raster.width) * raster.height) {
+    throw std::invalid_argument("GridLayer2D::importRaster: data size does not match the window");
+  }
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  forEachWindowValue(raster.origin_cell, raster.width, raster.height, raster.data.data(),
+                     [](GridTile* tile, int linear, float value) { tile->set(linear, value); });
+  finishWrite();
+}
+
+template <typename WriteCell>
+void GridLayer2D::forEachWindowValue(const CellIndex& origin_cell, int width, int height,
+                                     const float* values, WriteCell write_cell) {
+  if (width == 0 || height == 0) return;
   // Walk the window tile by tile, so each tile is looked up once.
   const CellIndex end = origin_cell + CellIndex(width, height);
   const TileIndex first_tile = tileOf(origin_cell);
@@ -134,17 +160,16 @@ void GridLayer2D::addRaster(const CellIndex& origin_cell, int width, int height,
       const CellIndex hi = (tile_min + CellIndex::Constant(GridTile::kSide)).cwiseMin(end);
       GridTile* tile = nullptr;
       for (int y = lo.y(); y < hi.y(); ++y) {
-        const float* row = log_odds_delta + static_cast<std::size_t>(y - origin_cell.y()) * width;
+        const float* row = values + static_cast<std::size_t>(y - origin_cell.y()) * width;
         for (int x = lo.x(); x < hi.x(); ++x) {
-          const float delta = row[x - origin_cell.x()];
-          if (std::isnan(delta)) continue;
+          const float value = row[x - origin_cell.x()];
+          if (std::isnan(value)) continue;
           if (tile == nullptr) tile = &tileForWrite({tx, ty});
-          tile->update(linearIndexInTile({x, y}), delta, min_log_odds_, max_log_odds_);
+          write_cell(tile, linearIndexInTile({x, y}), value);
         }
       }
     }
   }
-  finishWrite();
 }
 
 void GridLayer2D::setLogOdds(const CellIndex& index, float log_odds) {

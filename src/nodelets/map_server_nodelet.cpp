@@ -1,7 +1,6 @@
 // MapServer nodelet: gets the shared map of its manager and publishes it (MapPublisher). It can
 // resume a saved map at start (~load_map) and save the map when it is unloaded
 // (~save_on_shutdown), so that a restart loses nothing.
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -10,9 +9,9 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "occupancy_fusion/map/octomap_conversion.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
+#include "occupancy_fusion/ros/saved_map.h"
 #include "occupancy_fusion/ros/shared_map_access.h"
 
 namespace occupancy_fusion {
@@ -30,22 +29,6 @@ MapPersistenceConfig readMapPersistenceConfig(const ParameterSource& source) {
   return config;
 }
 
-// liboctomap reads a truncated file (an interrupted copy) without complaint, returning part of the
-// tree. Its header states the node count ("size N" before the "data" line): compare.
-void requireCompleteTree(const std::string& path, const octomap::OcTree& tree) {
-  std::ifstream in(path, std::ios::binary);
-  std::string line;
-  long long declared = -1;
-  while (std::getline(in, line) && line != "data") {
-    if (line.rfind("size ", 0) == 0) declared = std::stoll(line.substr(5));
-  }
-  if (declared >= 0 && static_cast<std::size_t>(declared) != tree.size()) {
-    throw std::runtime_error("the file is incomplete: its header declares " +
-                             std::to_string(declared) + " tree nodes, " +
-                             std::to_string(tree.size()) + " could be read");
-  }
-}
-
 class MapServer : public nodelet::Nodelet {
  public:
   // Unloading the nodelet (or stopping its manager) saves the map. Mappers of the manager may
@@ -56,8 +39,8 @@ class MapServer : public nodelet::Nodelet {
     std::vector<std::string> written;
     try {
       saveMapFiles(*map_, grid_config_, persistence_.save_on_shutdown, &written);
-      NODELET_INFO("save_on_shutdown: saved map '%s' as %s.{ot,bt,pgm,yaml}", map_->name().c_str(),
-                   persistence_.save_on_shutdown.c_str());
+      NODELET_INFO("save_on_shutdown: saved map '%s' as %s.{ot,bt,pgm,yaml,laser.yaml,laser.npy}",
+                   map_->name().c_str(), persistence_.save_on_shutdown.c_str());
     } catch (const std::exception& error) {
       NODELET_ERROR("save_on_shutdown: saving map '%s' failed (%zu files written): %s",
                     map_->name().c_str(), written.size(), error.what());
@@ -88,30 +71,32 @@ class MapServer : public nodelet::Nodelet {
   // Refuses to start on a bad file: a user who asked to resume a map must not silently get an
   // empty one (and overwrite the saved map at shutdown).
   void loadMap(const std::string& path, SharedMap* map) {
+    ResumedMap resumed;
     try {
-      const std::size_t known_before = map->voxels().knownVoxelCount();
-      const std::unique_ptr<octomap::OcTree> tree = readOcTreeFile(path, map->voxels().model());
-      requireCompleteTree(path, *tree);
-      fromOcTree(*tree, &map->voxels());  // one write: the change log reports every loaded block
-      if (known_before > 0) {
-        NODELET_WARN(
-            "load_map: map '%s' already held %zu known voxels (a mapper started first); "
-            "the file's voxels replaced those it contains",
-            map->name().c_str(), known_before);
-      }
-      if (path.size() >= 3 && path.compare(path.size() - 3, 3, ".bt") == 0) {
-        NODELET_WARN(
-            "load_map: %s is a .bt file, which holds labels only: occupied voxels start "
-            "at the upper clamping bound and free ones at the lower; save and load .ot "
-            "files to resume every log-odds exactly",
-            path.c_str());
-      }
-      NODELET_INFO("load_map: map '%s' resumed from %s (%zu known voxels)", map->name().c_str(),
-                   path.c_str(), map->voxels().knownVoxelCount());
+      resumed = resumeSavedMap(path, map);
     } catch (const std::exception& error) {
       throw std::runtime_error("load_map: cannot resume from '" + path + "': " + error.what() +
                                " (fix the path, or set load_map to \"\" to start an empty map)");
     }
+    if (resumed.known_voxels_before > 0) {
+      NODELET_WARN(
+          "load_map: map '%s' already held %zu known voxels (a mapper started first); "
+          "the file's voxels replaced those it contains",
+          map->name().c_str(), resumed.known_voxels_before);
+    }
+    if (resumed.labels_only) {
+      NODELET_WARN(
+          "load_map: %s is a .bt file, which holds labels only: occupied voxels start "
+          "at the upper clamping bound and free ones at the lower; save and load .ot "
+          "files to resume every log-odds exactly",
+          path.c_str());
+    }
+    if (!resumed.layer_found) {
+      NODELET_INFO("load_map: no laser layer file %s beside it: the 2D laser layer starts empty",
+                   resumed.layer_yaml.c_str());
+    }
+    NODELET_INFO("load_map: map '%s' resumed from %s (%zu known voxels, %zu laser layer cells)",
+                 map->name().c_str(), path.c_str(), resumed.known_voxels, resumed.layer_cells);
   }
 
   MapPersistenceConfig persistence_;

@@ -11,6 +11,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "occupancy_fusion/Octomap.h"
+#include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/map/octomap_conversion.h"
 #include "occupancy_fusion/params/config_readers.h"
@@ -369,7 +370,8 @@ bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
   try {
     saveMapFiles(*map_, config_.grid, prefix, &response.files, &lock_statistics_);
     response.success = true;
-    response.message = "saved map '" + map_->name() + "' as " + prefix + ".{ot,bt,pgm,yaml}";
+    response.message =
+        "saved map '" + map_->name() + "' as " + prefix + ".{ot,bt,pgm,yaml,laser.yaml,laser.npy}";
     ROS_INFO("%s: %s", name_.c_str(), response.message.c_str());
   } catch (const std::exception& error) {
     response.success = false;
@@ -396,6 +398,11 @@ void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::
   {
     const MapCallTimer timer(lock_statistics, "~save_map 2D view");
     raster = view.update(map.voxels(), &map.layer());
+  }
+  LogOddsRaster layer_window;
+  {
+    const MapCallTimer timer(lock_statistics, "~save_map laser layer copy");
+    layer_window = map.layer().toLogOddsRaster();
   }
   if (raster.empty()) {
     throw std::runtime_error("map '" + map.name() +
@@ -424,6 +431,9 @@ void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::
   writeMapServerFiles(raster, prefix);
   written->push_back(prefix + ".pgm");
   written->push_back(prefix + ".yaml");
+  const LayerFilePaths layer_paths = writeLayerFiles(layer_window, prefix);
+  written->push_back(layer_paths.npy);
+  written->push_back(layer_paths.yaml);
 }
 
 }  // namespace occupancy_fusion

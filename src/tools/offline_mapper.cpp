@@ -36,8 +36,9 @@ depth images, disparity images) and a 2D laser layer (laser scans), as the mappe
 online. Writes DIR/NAME.bt, .ot (OctoMap), .pcd (every known voxel with its occupancy
 probability), .pgm + .yaml (map_server files of the fused 2D view: the voxels within
 occupancy_min_z..occupancy_max_z and the laser layer), .npy (per-column log-odds behind the 2D
-view), .png (a picture of the 2D view, y up) and NAME_voxels.png (the occupied voxels in 3D, seen
-obliquely, coloured by height; only when some voxel is occupied). A progress line (frames per
+view), .png (a picture of the 2D view, y up), .laser.npy + .laser.yaml (the laser layer, which
+the MapServer's load_map resumes with the .ot) and NAME_voxels.png (the occupied voxels in 3D,
+seen obliquely, coloured by height; only when some voxel is occupied). A progress line (frames per
 sensor kind, elapsed time, rate) is printed every two seconds, and a summary at the end.
 
 Inputs (at least one; any mix, each repeatable):

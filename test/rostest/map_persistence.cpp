@@ -166,7 +166,7 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
 
   // Unloading A saves the map while the mapper keeps writing to it.
   ASSERT_TRUE(unloadNodelet("/map_server_a"));
-  for (const char* extension : {".ot", ".bt", ".pgm", ".yaml"}) {
+  for (const char* extension : {".ot", ".bt", ".pgm", ".yaml", ".laser.npy", ".laser.yaml"}) {
     EXPECT_TRUE(fs::exists(a + extension)) << a + extension;
   }
   for (const auto& entry : fs::directory_iterator(folder)) {
@@ -199,8 +199,9 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   // Every log-odds came back exactly: saving again gives the same file, byte for byte.
   const SaveMap resaved = save("/map_server_b/save_map", "");
   ASSERT_TRUE(resaved.response.success) << resaved.response.message;
-  EXPECT_EQ(resaved.response.files.size(), 4u);
+  EXPECT_EQ(resaved.response.files.size(), 6u);
   EXPECT_EQ(readBytes(b + ".ot"), readBytes(a + ".ot"));
+  EXPECT_EQ(readBytes(b + ".laser.npy"), readBytes(a + ".laser.npy"));
 
   // 3. A file that is not there: the MapServer refuses to start.
   setMapServerParameters("/map_server_c", (folder / "absent.ot").string(), "", b);

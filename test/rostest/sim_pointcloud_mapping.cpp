@@ -284,7 +284,7 @@ TEST(SimPointCloudMapping, SaveMapWritesReadableFiles) {
   save.request.prefix = (folder / "room").string();
   ASSERT_TRUE(ros::service::call("/map_server/save_map", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
-  EXPECT_EQ(save.response.files.size(), 4u);  // .ot, .bt, .pgm, .yaml
+  EXPECT_EQ(save.response.files.size(), 6u);  // .ot, .bt, .pgm, .yaml, .laser.npy, .laser.yaml
 
   // .bt: liboctomap reads it, with as many occupied voxels as were published.
   octomap::OcTree tree(save.request.prefix + ".bt");

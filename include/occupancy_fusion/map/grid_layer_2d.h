@@ -139,6 +139,10 @@ class GridLayer2D {
   // width * height values. A NaN increment means "no information": the cell is left as it is.
   void addRaster(const CellIndex& origin_cell, int width, int height, const float* log_odds_delta);
   void setLogOdds(const CellIndex& index, float log_odds);  // unclamped, for import
+  // Sets every known (non-NaN) cell of the raster to its value, unclamped, in one write: what a
+  // saved layer resumes with. The raster's unknown cells leave the layer's cells as they are.
+  // Throws std::invalid_argument for another resolution or a data size not width x height.
+  void importRaster(const LogOddsRaster& raster);
   // As VoxelMap::clearBox: every known cell whose centre lies in [min, max] becomes free at the
   // lower clamping bound. Returns the number of cells changed.
   std::size_t clearBox(const Eigen::Vector2d& min, const Eigen::Vector2d& max);
@@ -170,6 +174,11 @@ class GridLayer2D {
   const GridTile* findTile(const TileIndex& tile) const;
   void markWritten(std::uint64_t key, GridTile* tile);
   void finishWrite();  // trims the change log, bumps the version
+  // Calls write_cell(tile, linear index in tile, value) for each non-NaN value of a dense window
+  // (LogOddsRaster's layout), allocating tiles as needed. Caller holds the unique lock.
+  template <typename WriteCell>
+  void forEachWindowValue(const CellIndex& origin_cell, int width, int height, const float* values,
+                          WriteCell write_cell);
   std::optional<CellBox> knownBoundsLocked() const;
   std::vector<float> windowLocked(const CellIndex& origin_cell, int width, int height) const;
 

@@ -29,6 +29,7 @@ struct MapOutputs {
 };
 
 // Writes dir/name.bt and .ot (OctoMap), .pcd (every known voxel: centre and probability),
+// .laser.npy + .laser.yaml (the laser layer, which the MapServer's load_map resumes with the .ot),
 // .pgm + .yaml (map_server files of the fused 2D view), .npy (fusedLogOdds, float32, row 0 = the
 // lowest y) and .png (the 2D view, y up). With nothing known there is no 2D view: the 2D files
 // are left out. Throws std::runtime_error naming a file that cannot be written.

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_files.h"
 
 namespace occupancy_fusion {
@@ -61,6 +62,9 @@ MapOutputs writeMapOutputs(const RecordingMapper& mapper, const std::string& dir
   outputs.files.push_back(prefix + ".ot");
   writePcd(map, prefix + ".pcd");
   outputs.files.push_back(prefix + ".pcd");
+  const LayerFilePaths layer_paths = writeLayerFiles(mapper.laserLayer().toLogOddsRaster(), prefix);
+  outputs.files.push_back(layer_paths.npy);
+  outputs.files.push_back(layer_paths.yaml);
 
   const OccupancyRaster grid = mapper.fusedGrid();
   if (grid.empty()) return outputs;

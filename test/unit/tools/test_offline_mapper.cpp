@@ -76,7 +76,8 @@ RunResult OfflineMapperTest::mapped_;
 
 TEST_F(OfflineMapperTest, WritesEveryFileAndASummary) {
   ASSERT_EQ(mapped_.exit_code, 0) << mapped_.err;
-  for (const char* extension : {".bt", ".ot", ".pcd", ".pgm", ".yaml", ".npy", ".png"}) {
+  for (const char* extension :
+       {".bt", ".ot", ".pcd", ".pgm", ".yaml", ".npy", ".png", ".laser.npy", ".laser.yaml"}) {
     const fs::path path = dir_ / "out" / (std::string("room") + extension);
     EXPECT_TRUE(fs::is_regular_file(path)) << path;
     EXPECT_GT(fs::file_size(path), 0u) << path;

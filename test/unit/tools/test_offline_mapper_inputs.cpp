@@ -21,6 +21,7 @@
 #include <rosbag/view.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"
 #include "occupancy_fusion/tools/ros_conversions.h"
@@ -234,6 +235,18 @@ TEST_F(InputKindsTest, EachLaserScannerAloneMapsTheWallsAtItsHeight) {
         << cells.occupied_near_surface << " of " << cells.occupied;
     EXPECT_LE(static_cast<double>(cells.free_inside_solid), 0.005 * cells.free)
         << cells.free_inside_solid << " of " << cells.free;
+    // With lasers only, the fused view is the laser layer: the layer's own files (what the
+    // MapServer's load_map resumes) hold the same cells with the same log-odds.
+    const LogOddsRaster layer = readLayerFiles((dir_ / "laser" / "laser.laser.yaml").string());
+    const Npy fused = readNpy(dir_ / "laser" / "laser.npy");
+    ASSERT_EQ(layer.width, fused.cols);
+    ASSERT_EQ(layer.height, fused.rows);
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < layer.data.size(); ++i) {
+      const float a = layer.data[i], b = fused.values[i];
+      if (std::isnan(a) != std::isnan(b) || (!std::isnan(a) && a != b)) ++differing;
+    }
+    EXPECT_EQ(differing, 0u);
   }
 }
 
