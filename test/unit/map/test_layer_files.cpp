@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "../test_folder.h"
 #include "occupancy_fusion/map/layer_files.h"
 
 namespace occupancy_fusion {
@@ -68,20 +69,7 @@ CellValues fillRandom(GridLayer2D* layer, unsigned seed, int cells) {
   return written;
 }
 
-class LayerFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    folder_ = fs::temp_directory_path() /
-              ("layer_files_test_" + std::to_string(::getpid()) + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
-  std::string path(const std::string& name) const { return (folder_ / name).string(); }
-
-  fs::path folder_;
-};
+using LayerFiles = TestFolder;
 
 TEST_F(LayerFiles, SavedLayerReadsBackBitExactAtTheSameCells) {
   GridLayer2D saved(layerConfig());

@@ -17,6 +17,7 @@
 #include <octomap/OcTree.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../test_folder.h"
 #include "occupancy_fusion/map/map_files.h"
 
 namespace occupancy_fusion {
@@ -24,27 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class MapFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    folder_ =
-        fs::temp_directory_path() /
-        ("map_files_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override {
-    // Nothing but the written files: no temporary file may be left behind.
-    for (const auto& entry : fs::directory_iterator(folder_)) {
-      EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
-    }
-    fs::remove_all(folder_);
-  }
-  std::string path(const std::string& name) const { return (folder_ / name).string(); }
-
-  fs::path folder_;
-};
+using MapFiles = TestFolder;
 
 std::string readAll(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -18,6 +18,7 @@
 #include <string>
 #include <tuple>
 
+#include "../test_folder.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/map/octomap_conversion.h"
@@ -27,26 +28,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class MapPersistence : public ::testing::Test {
- protected:
-  void SetUp() override {
-    folder_ = fs::temp_directory_path() /
-              ("map_persistence_test_" + std::to_string(::getpid()) + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override {
-    for (const auto& entry : fs::directory_iterator(folder_)) {
-      EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
-          << "temporary file left behind: " << entry.path();
-    }
-    fs::remove_all(folder_);
-  }
-  std::string path(const std::string& name) const { return (folder_ / name).string(); }
-
-  fs::path folder_;
-};
+using MapPersistence = TestFolder;
 
 std::string readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "../test_folder.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/ros/map_publisher.h"
@@ -68,21 +69,15 @@ std::size_t cellMismatches(const GridLayer2D& expected, const GridLayer2D& actua
   return mismatches + (expected.knownCellCount() != actual.knownCellCount() ? 1 : 0);
 }
 
-class SavedMap : public ::testing::Test {
+class SavedMap : public TestFolder {
  protected:
   void SetUp() override {
-    folder_ = fs::temp_directory_path() /
-              ("saved_map_test_" + std::to_string(::getpid()) + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
+    TestFolder::SetUp();
     fill(&saved_, 5);
     saveMapFiles(saved_, FusedGridConfig(), prefix(), &written_);
   }
-  void TearDown() override { fs::remove_all(folder_); }
-  std::string prefix() const { return (folder_ / "site").string(); }
+  std::string prefix() const { return path("site"); }
 
-  fs::path folder_;
   SharedMap saved_{mapConfig()};
   std::vector<std::string> written_;
 };
