@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "occupancy_fusion/map/block_change_log.h"
+#include "occupancy_fusion/map/log_odds_cells.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
 
@@ -24,41 +25,19 @@ namespace occupancy_fusion {
 using CellIndex = Eigen::Vector2i;  // floor(p / resolution), per axis
 using TileIndex = Eigen::Vector2i;  // floor(cell index / GridTile::kSide), per axis
 
-// A dense square of kSide^2 cells. NaN log-odds marks a cell that was never observed.
-struct GridTile {
+// A dense square of kSide^2 cells. NaN log-odds marks a cell that was never observed; version is
+// maintained by GridLayer2D.
+struct GridTile : LogOddsCells<32 * 32> {
   static constexpr int kSideLog2 = 5;
   static constexpr int kSide = 1 << kSideLog2;
   static constexpr int kArea = kSide * kSide;
-  static constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
-
-  GridTile() { log_odds.fill(kUnknown); }
+  static_assert(kArea == kCellCount, "kSide^2 cells");
 
   // x fastest, so a sweep along x walks memory in order.
   static int linearIndex(int x, int y) { return x + kSide * y; }
   static Eigen::Vector2i localIndex(int linear) {
     return {linear & (kSide - 1), linear >> kSideLog2};
   }
-  static bool isKnown(float value) { return !std::isnan(value); }
-
-  // Adds delta to one cell (an unknown cell starts at the prior, 0) and clamps.
-  void update(int linear, float delta, float min_log_odds, float max_log_odds) {
-    float& value = log_odds[linear];
-    float sum = delta;
-    if (isKnown(value)) {
-      sum += value;
-    } else {
-      ++known_count;
-    }
-    value = sum < min_log_odds ? min_log_odds : (sum > max_log_odds ? max_log_odds : sum);
-  }
-  void set(int linear, float value) {
-    if (isKnown(value) != isKnown(log_odds[linear])) known_count += isKnown(value) ? 1 : -1;
-    log_odds[linear] = value;
-  }
-
-  std::array<float, kArea> log_odds;
-  int known_count = 0;
-  std::uint64_t version = 0;  // layer version of the last write; maintained by GridLayer2D
 };
 
 struct GridLayer2DConfig {
