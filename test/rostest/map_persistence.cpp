@@ -1,12 +1,16 @@
 // Nothing lost, end to end in a nodelet manager (map_persistence.test): the test node loads and
 // unloads MapServers through the manager's services, as `nodelet load` / `nodelet unload` do.
-//  1. MapServer A maps with the running PointCloudMapper; ~save_map reports failures clearly and
-//     keeps the previous files; unloading A saves the map (save_on_shutdown) while the mapper
-//     still writes.
+//  1. MapServer A maps with the running PointCloudMapper and LaserMapper; ~save_map reports
+//     failures clearly and keeps the previous files; unloading A saves the map (save_on_shutdown)
+//     while the mappers still write.
 //  2. With every user gone (map freed), MapServer B starts with load_map: the published cloud is
-//     exactly the saved file's occupied voxels right after start, and B saves a byte-identical .ot.
+//     exactly the saved file's occupied voxels right after start, the published projected_map is
+//     exactly the fused view of the saved voxels and laser layer (computed here from the files),
+//     and B saves a byte-identical .ot and laser layer.
 //  3. A bad load_map path stops the MapServer from loading.
 //  4. Mapping resumes on B's map: new frames update the loaded voxels, which stay.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -14,10 +18,12 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/NodeletLoad.h>
 #include <nodelet/NodeletUnload.h>
 #include <octomap/AbstractOcTree.h>
@@ -27,6 +33,9 @@
 #include <std_srvs/SetBool.h>
 
 #include "occupancy_fusion/SaveMap.h"
+#include "occupancy_fusion/map/fused_grid.h"
+#include "occupancy_fusion/map/layer_files.h"
+#include "occupancy_fusion/map/map_files.h"
 #include "rostest_support.h"
 
 namespace occupancy_fusion {
@@ -41,35 +50,37 @@ std::string readBytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// The last octomap_point_cloud_centers message, from a subscription made when asked. The topic
-// is latched, and roscpp hands a new subscription the latched message of a publisher that is
-// already gone (an unloaded MapServer) when its link is not torn down yet: clouds stamped before
+// The last message of a MapServer output, from a subscription made when asked. The topics are
+// latched, and roscpp hands a new subscription the latched message of a publisher that is
+// already gone (an unloaded MapServer) when its link is not torn down yet: messages stamped before
 // `not_before` are such leftovers and ignored.
-class CloudWatcher {
+template <class Message>
+class OutputWatcher {
  public:
+  explicit OutputWatcher(std::string topic) : topic_(std::move(topic)) {}
   void subscribe(const ros::Time& not_before = ros::Time()) {
     std::lock_guard<std::mutex> lock(mutex_);
     last_.reset();
     not_before_ = not_before;
-    subscriber_ = ros::NodeHandle().subscribe("/octomap_point_cloud_centers", 1,
-                                              &CloudWatcher::onCloud, this);
+    subscriber_ = ros::NodeHandle().subscribe(topic_, 1, &OutputWatcher::onMessage, this);
   }
   void unsubscribe() { subscriber_.shutdown(); }
-  sensor_msgs::PointCloud2ConstPtr last() const {
+  typename Message::ConstPtr last() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return last_;
   }
 
  private:
-  void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+  void onMessage(const typename Message::ConstPtr& message) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (cloud->header.stamp < not_before_) return;
-    last_ = cloud;
+    if (message->header.stamp < not_before_) return;
+    last_ = message;
   }
+  const std::string topic_;
   mutable std::mutex mutex_;
   ros::Subscriber subscriber_;
   ros::Time not_before_;
-  sensor_msgs::PointCloud2ConstPtr last_;
+  typename Message::ConstPtr last_;
 };
 
 bool loadNodelet(const std::string& name, const std::string& type,
@@ -131,7 +142,8 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   fs::remove_all(folder);
   fs::create_directories(folder);
   const std::string a = (folder / "a").string();
-  CloudWatcher watcher;
+  OutputWatcher<sensor_msgs::PointCloud2> watcher("/octomap_point_cloud_centers");
+  OutputWatcher<nav_msgs::OccupancyGrid> grid_watcher("/projected_map");
 
   ASSERT_TRUE(ros::service::waitForService("/manager/load_nodelet", ros::Duration(20.0)));
   // 1. MapServer A on the map the PointCloudMapper fills.
@@ -179,14 +191,41 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   const double saved_occupied = occupiedVoxels(saved);
   EXPECT_GE(saved_occupied, 2000.0);
 
+  const LogOddsRaster saved_layer = readLayerFiles(a + ".laser.yaml");
+  const auto known_cells = std::count_if(saved_layer.data.begin(), saved_layer.data.end(),
+                                         [](float value) { return !std::isnan(value); });
+  EXPECT_GE(known_cells, 5000) << "the laser layer was not saved";
+
   // 2. Everyone leaves: the map is freed. B starts on an empty manager with load_map.
   ASSERT_TRUE(unloadNodelet("/point_cloud_mapper"));
+  ASSERT_TRUE(unloadNodelet("/laser_mapper"));
   ASSERT_TRUE(unloadNodelet("/simulator"));
   const std::string b = (folder / "b").string();
   setMapServerParameters("/map_server_b", a + ".ot", "", b);
   watcher.subscribe(ros::Time::now());
+  grid_watcher.subscribe(ros::Time::now());
   ASSERT_TRUE(loadNodelet("/map_server_b", "occupancy_fusion/MapServer"));
-  ASSERT_TRUE(waitUntil([&] { return watcher.last() != nullptr; }, 10.0));
+  ASSERT_TRUE(waitUntil([&] { return watcher.last() && grid_watcher.last(); }, 10.0));
+  // The fused view of what was saved, computed here from the two files, is what B publishes;
+  // without the laser layer it would not be (the layer's cells differ from the voxels' columns).
+  {
+    VoxelMapConfig voxel_config;
+    voxel_config.resolution = kResolution;
+    const std::unique_ptr<VoxelMap> voxels = readOctomapFile(a + ".ot", voxel_config);
+    GridLayer2DConfig layer_config;
+    layer_config.resolution = kResolution;
+    GridLayer2D layer(layer_config);
+    layer.importRaster(saved_layer);
+    const OccupancyRaster expected = projectToRaster(*voxels, &layer, FusedGridConfig());
+    const OccupancyRaster voxels_only = projectToRaster(*voxels, nullptr, FusedGridConfig());
+    const nav_msgs::OccupancyGrid& published = *grid_watcher.last();
+    ASSERT_EQ(static_cast<int>(published.info.width), expected.width);
+    ASSERT_EQ(static_cast<int>(published.info.height), expected.height);
+    EXPECT_NEAR(published.info.origin.position.x, expected.origin_x, 1e-6);
+    EXPECT_NEAR(published.info.origin.position.y, expected.origin_y, 1e-6);
+    EXPECT_TRUE(published.data == expected.data) << "projected_map is not the saved map's view";
+    EXPECT_TRUE(voxels_only.width != expected.width || voxels_only.data != expected.data);
+  }
   // Right after start, the published cloud is exactly the file's occupied voxels.
   const std::vector<Eigen::Vector3d> points = cloudPoints(*watcher.last());
   EXPECT_EQ(static_cast<double>(points.size()), saved_occupied);
@@ -202,6 +241,9 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   EXPECT_EQ(resaved.response.files.size(), 6u);
   EXPECT_EQ(readBytes(b + ".ot"), readBytes(a + ".ot"));
   EXPECT_EQ(readBytes(b + ".laser.npy"), readBytes(a + ".laser.npy"));
+  const LogOddsRaster resaved_layer = readLayerFiles(b + ".laser.yaml");
+  EXPECT_EQ(resaved_layer.origin_cell, saved_layer.origin_cell);
+  EXPECT_EQ(resaved_layer.width, saved_layer.width);
 
   // 3. A file that is not there: the MapServer refuses to start.
   setMapServerParameters("/map_server_c", (folder / "absent.ot").string(), "", b);
@@ -247,6 +289,7 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   EXPECT_GE(static_cast<double>(kept_occupied) / loaded, 0.9);
   EXPECT_GE(changed, loaded / 10);
   watcher.unsubscribe();
+  grid_watcher.unsubscribe();
   fs::remove_all(folder);
 }
 
