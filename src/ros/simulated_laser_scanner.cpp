@@ -42,15 +42,9 @@ std::vector<std::string> readScannerNames(const ParameterSource& source) {
 void SimulatedLaserScannerConfig::validate() const {
   if (name.empty()) throw std::invalid_argument("laser scanner name must not be empty");
   if (topic.empty()) throw std::invalid_argument(name + "/topic must not be empty");
-  if (!(rate > 0.0) || !std::isfinite(rate)) {
-    throw std::invalid_argument(name + "/rate must be a positive number of Hz");
-  }
+  validateSensorRate(name, rate);
   if (mount.frame.empty()) throw std::invalid_argument(name + "/frame_id must not be empty");
-  try {
-    scanner.validate();
-  } catch (const std::invalid_argument& error) {
-    throw std::invalid_argument(name + "/: " + error.what());
-  }
+  validateUnder(name + "/", scanner);
 }
 
 SimulatedLaserScannerConfig readSimulatedLaserScannerConfig(const ParameterSource& source,

@@ -37,21 +37,21 @@ Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string
   return pose;
 }
 
-void SimulatedDepthCameraConfig::validate() const {
-  if (name.empty()) throw std::invalid_argument("camera name must not be empty");
+void validateSensorRate(const std::string& name, double rate) {
   if (!(rate > 0.0) || !std::isfinite(rate)) {
     throw std::invalid_argument(name + "/rate must be a positive number of Hz");
   }
+}
+
+void SimulatedDepthCameraConfig::validate() const {
+  if (name.empty()) throw std::invalid_argument("camera name must not be empty");
+  validateSensorRate(name, rate);
   if (!(max_range > 0.0)) throw std::invalid_argument(name + "/max_range must be positive (m)");
   if (mount.frame.empty() || optical_frame.empty()) {
     throw std::invalid_argument(name + "/frame_id and " + name +
                                 "/optical_frame_id must not be empty");
   }
-  try {
-    camera.validate();
-  } catch (const std::invalid_argument& error) {
-    throw std::invalid_argument(name + "/: " + error.what());
-  }
+  validateUnder(name + "/", camera);
 }
 
 SimulatedDepthCameraConfig readSimulatedDepthCameraConfig(const ParameterSource& source,
@@ -96,12 +96,17 @@ SimulatedDepthCamera::SimulatedDepthCamera(const ros::NodeHandle& node_handle,
   cloud_publisher_ = camera_handle.advertise<sensor_msgs::PointCloud2>("depth/points", 1);
 }
 
-std::vector<geometry_msgs::TransformStamped> SimulatedDepthCamera::staticTransforms(
-    const std::string& body_frame) const {
+std::vector<geometry_msgs::TransformStamped> cameraStaticTransforms(
+    const SimulatedDepthCameraConfig& camera, const std::string& body_frame) {
   const ros::Time now = ros::Time::now();
   return {
-      transformMessage(config_.mount.T_body_sensor, body_frame, config_.mount.frame, now),
-      transformMessage(sim::opticalFrameInBody(), config_.mount.frame, config_.optical_frame, now)};
+      transformMessage(camera.mount.T_body_sensor, body_frame, camera.mount.frame, now),
+      transformMessage(sim::opticalFrameInBody(), camera.mount.frame, camera.optical_frame, now)};
+}
+
+std::vector<geometry_msgs::TransformStamped> SimulatedDepthCamera::staticTransforms(
+    const std::string& body_frame) const {
+  return cameraStaticTransforms(config_, body_frame);
 }
 
 void SimulatedDepthCamera::publish(const sim::Scene& scene, const Eigen::Isometry3d& T_world_body,

@@ -7,7 +7,6 @@
 #include <stereo_msgs/DisparityImage.h>
 
 #include "occupancy_fusion/ros/disparity_messages.h"
-#include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/trajectory.h"
 
 namespace occupancy_fusion {
@@ -31,11 +30,7 @@ void SimulatedStereoCameraConfig::validate() const {
   if (!(baseline > 0.0) || !std::isfinite(baseline)) {
     throw std::invalid_argument(name + "/baseline must be a positive number of m");
   }
-  try {
-    noise.validate();
-  } catch (const std::invalid_argument& error) {
-    throw std::invalid_argument(name + "/noise/: " + error.what());
-  }
+  validateUnder(name + "/noise/", noise);
 }
 
 SimulatedStereoCameraConfig readSimulatedStereoCameraConfig(const ParameterSource& source,
@@ -78,11 +73,7 @@ SimulatedStereoCamera::SimulatedStereoCamera(const ros::NodeHandle& node_handle,
 
 std::vector<geometry_msgs::TransformStamped> SimulatedStereoCamera::staticTransforms(
     const std::string& body_frame) const {
-  const ros::Time now = ros::Time::now();
-  return {
-      transformMessage(config_.left.mount.T_body_sensor, body_frame, config_.left.mount.frame, now),
-      transformMessage(sim::opticalFrameInBody(), config_.left.mount.frame,
-                       config_.left.optical_frame, now)};
+  return cameraStaticTransforms(config_.left, body_frame);
 }
 
 void SimulatedStereoCamera::publish(const sim::Scene& scene, const Eigen::Isometry3d& T_world_body,

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,20 @@ struct SensorMount {
 // roll) in the body frame; each key that is absent keeps default_pose's value.
 Eigen::Isometry3d readMountPose(const ParameterSource& source, const std::string& prefix,
                                 const Eigen::Isometry3d& default_pose);
+
+// Throws std::invalid_argument naming `<name>/rate` unless `rate` is a positive number of Hz.
+void validateSensorRate(const std::string& name, double rate);
+
+// Runs part.validate() and prefixes what it throws with the parameter block `prefix` (e.g.
+// "camera/"), so the user learns where the bad parameter sits.
+template <typename Part>
+void validateUnder(const std::string& prefix, const Part& part) {
+  try {
+    part.validate();
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument(prefix + ": " + error.what());
+  }
+}
 
 class SimulatedSensor {
  public:
@@ -60,6 +75,10 @@ struct SimulatedDepthCameraConfig {
 // x, y, z (m), roll, pitch, yaw (rad) in the body frame.
 SimulatedDepthCameraConfig readSimulatedDepthCameraConfig(const ParameterSource& source,
                                                           const std::string& prefix);
+
+// For /tf_static: the body to the camera's link, and the link to its optical frame.
+std::vector<geometry_msgs::TransformStamped> cameraStaticTransforms(
+    const SimulatedDepthCameraConfig& camera, const std::string& body_frame);
 
 // A depth camera as an RGB-D driver publishes it: <name>/depth/image (32FC1, metres, NaN = no
 // return) with <name>/depth/camera_info, and the same pixels as <name>/depth/points
