@@ -49,16 +49,9 @@ std::string configText() {
 class OfflineMapperTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    ros::Time::init();
-    dir_ = makeTempDir();
-    std::ofstream(dir_ / "mapper.yaml") << configText();
-    SimulatedRecordingConfig config;
-    config.scene = "room";
-    config.frames = kFrames;
-    config.rate_hz = 4.0;
     std::vector<std::unique_ptr<SimulatedSensor>> sensors;
     sensors.push_back(std::make_unique<PointCloudCameraSensor>(PointCloudCameraConfig()));
-    writeSimulatedRecording(config, sensors, (dir_ / "room.bag").string());
+    dir_ = makeRoomRecordingDir(configText(), kFrames, sensors);
     mapped_ = runTool(OFFLINE_MAPPER_PATH,
                       "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" +
                           (dir_ / "room.bag").string() + "' --output-dir '" +

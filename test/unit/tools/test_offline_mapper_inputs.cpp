@@ -157,15 +157,8 @@ CellCheck checkLaserCells(const fs::path& npy_path, const fs::path& yaml_path,
 class InputKindsTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    ros::Time::init();
-    dir_ = makeTempDir();
-    std::ofstream(dir_ / "mapper.yaml") << configText();
-    SimulatedRecordingConfig config;
-    config.scene = "room";
-    config.frames = kFrames;
-    config.rate_hz = 4.0;
-    writeSimulatedRecording(config, makeSimulatedSensors({"depth", "disparity", "scan"}),
-                            (dir_ / "room.bag").string());
+    dir_ = makeRoomRecordingDir(configText(), kFrames,
+                                makeSimulatedSensors({"depth", "disparity", "scan"}));
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 

@@ -1,5 +1,5 @@
-// Helpers of the tools' end-to-end tests: running a built tool, and independent readers of the
-// files it writes (PGM, NPY, OctoMap leaves as voxel centres).
+// Helpers of the tools' end-to-end tests: a simulated recording to map, running a built tool, and
+// independent readers of the files it writes (PGM, NPY, OctoMap leaves as voxel centres).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -12,11 +12,15 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <octomap/OcTree.h>
+#include <ros/time.h>
+
+#include "occupancy_fusion/tools/simulated_recording.h"
 
 namespace occupancy_fusion {
 namespace test_support {
@@ -54,6 +58,21 @@ inline fs::path makeTempDir() {
   std::string pattern = (fs::temp_directory_path() / "offline_mapper_test_XXXXXX").string();
   if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
   return pattern;
+}
+
+// A fresh folder holding the mapper's parameters as mapper.yaml and room.bag: `frames` frames of
+// the room scene at 4 Hz from `sensors`.
+inline fs::path makeRoomRecordingDir(const std::string& mapper_yaml, int frames,
+                                     const std::vector<std::unique_ptr<SimulatedSensor>>& sensors) {
+  ros::Time::init();
+  const fs::path dir = makeTempDir();
+  std::ofstream(dir / "mapper.yaml") << mapper_yaml;
+  SimulatedRecordingConfig config;
+  config.scene = "room";
+  config.frames = frames;
+  config.rate_hz = 4.0;
+  writeSimulatedRecording(config, sensors, (dir / "room.bag").string());
+  return dir;
 }
 
 struct Pgm {
