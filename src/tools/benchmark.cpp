@@ -24,6 +24,7 @@
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"
+#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
@@ -42,36 +43,9 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Harness
 
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-// "0.05,0.1" -> {0.05, 0.1}; UsageError naming the option on anything else.
-template <typename T>
-std::vector<T> parseList(const std::string& option, const std::string& text) {
-  std::vector<T> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    std::istringstream parser(item);
-    T value;
-    if (!(parser >> value) || !parser.eof() || !(value > T{0})) {
-      throw UsageError("--" + option + " needs positive numbers separated by commas, got '" + text +
-                       "'");
-    }
-    values.push_back(value);
-  }
-  if (values.empty()) throw UsageError("--" + option + " is empty");
-  return values;
-}
+using bench::Clock;
+using bench::median;
+using bench::millisecondsSince;
 
 int positiveInt(const CommandLine& args, const std::string& option, int fallback) {
   const int value = args.intValue(option, fallback);
@@ -136,12 +110,7 @@ RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, dou
 
 RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                      const std::vector<SensorCloud>& sources, double resolution, double max_range) {
-  const OccupancyModel model;
-  octomap::OcTree tree(resolution);
-  tree.setProbHit(model.prob_hit);
-  tree.setProbMiss(model.prob_miss);
-  tree.setClampingThresMin(model.clamp_min);
-  tree.setClampingThresMax(model.clamp_max);
+  octomap::OcTree tree = bench::makeOctomapTree(resolution);
   const auto start = Clock::now();
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     const Eigen::Vector3d& o = sources[i].origin;
@@ -153,8 +122,9 @@ RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
 
 int runPointCloud(const CommandLine& args) {
   const std::vector<double> resolutions =
-      parseList<double>("resolution", args.value("resolution", "0.05,0.1"));
-  const std::vector<int> point_counts = parseList<int>("points", args.value("points", "20000"));
+      bench::parsePositiveList<double>("resolution", args.value("resolution", "0.05,0.1"));
+  const std::vector<int> point_counts =
+      bench::parsePositiveList<int>("points", args.value("points", "20000"));
   const int cloud_count = positiveInt(args, "clouds", 10);
   const int repetitions = positiveInt(args, "repetitions", 3);
   const double max_range = args.doubleValue("max_range", -1.0);

@@ -22,47 +22,15 @@
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/seven_scenes_folder.h"
+#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// CPU time of all the process's threads: on a shared machine wall time includes waiting for a
-// core, CPU time does not (with one thread it is the cost of the work itself).
-double processCpuMilliseconds() {
-  timespec now{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-  return 1e3 * static_cast<double>(now.tv_sec) + 1e-6 * static_cast<double>(now.tv_nsec);
-}
-
-double medianOf(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-std::vector<double> parseResolutions(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    std::istringstream parser(item);
-    double value = 0.0;
-    if (!(parser >> value) || !parser.eof() || !(value > 0.0)) {
-      throw UsageError("--resolution needs positive numbers separated by commas, got '" + text +
-                       "'");
-    }
-    values.push_back(value);
-  }
-  if (values.empty()) throw UsageError("--resolution is empty");
-  return values;
-}
+using bench::Clock;
+using bench::millisecondsSince;
+using bench::processCpuMilliseconds;
 
 // The frame's valid pixels as world points, the way a point-cloud mapper would receive them.
 octomap::Pointcloud worldPoints(const SevenScenesFrame& frame, const CameraIntrinsics& camera) {
@@ -185,20 +153,15 @@ OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntr
       !cv::imwrite(image_path, renderOccupied(map, camera, frames.front().T_world_camera))) {
     throw UsageError("cannot write --image " + image_path);
   }
-  return {medianOf(frame_ms), updates / (total_ms * 1e-3), map.memoryBytes() * 1e-6,
-          medianOf(frame_cpu_ms), mapHash(map)};
+  return {bench::median(frame_ms), updates / (total_ms * 1e-3), map.memoryBytes() * 1e-6,
+          bench::median(frame_cpu_ms), mapHash(map)};
 }
 
 // Median milliseconds per insertPointCloud call and the tree's memory.
 std::pair<double, double> runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                                      const std::vector<Eigen::Vector3d>& origins, double resolution,
                                      bool discretize) {
-  const OccupancyModel model;
-  octomap::OcTree tree(resolution);
-  tree.setProbHit(model.prob_hit);
-  tree.setProbMiss(model.prob_miss);
-  tree.setClampingThresMin(model.clamp_min);
-  tree.setClampingThresMax(model.clamp_max);
+  octomap::OcTree tree = bench::makeOctomapTree(resolution);
   std::vector<double> frame_ms;
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     const octomap::point3d origin(origins[i].x(), origins[i].y(), origins[i].z());
@@ -206,15 +169,15 @@ std::pair<double, double> runOctomap(const std::vector<octomap::Pointcloud>& clo
     tree.insertPointCloud(clouds[i], origin, -1.0, false, discretize);
     frame_ms.push_back(millisecondsSince(start));
   }
-  return {medianOf(frame_ms), tree.memoryUsage() * 1e-6};
+  return {bench::median(frame_ms), tree.memoryUsage() * 1e-6};
 }
 
 }  // namespace
 
 int runDepth(const CommandLine& args) {
   const SevenScenesFolder folder(args.required("folder"));
-  const std::vector<double> resolutions =
-      parseResolutions(args.value("resolution", "0.02,0.04,0.08,0.16"));
+  const std::vector<double> resolutions = bench::parsePositiveList<double>(
+      "resolution", args.value("resolution", "0.02,0.04,0.08,0.16"));
   const int frame_limit = args.intValue("frames", static_cast<int>(folder.size()));
   const int octomap_frames = args.intValue("octomap-frames", 2);
   const std::string image_path = args.value("image", "");

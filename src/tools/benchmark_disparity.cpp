@@ -33,6 +33,7 @@
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/middlebury_folder.h"
+#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/stereo_matching.h"
 
@@ -40,21 +41,12 @@ namespace occupancy_fusion {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using bench::Clock;
+using bench::millisecondsSince;
 
 // Process CPU time (all threads), ms. On a shared, loaded machine the wall time of a call is
 // mostly the scheduler's; with one thread the CPU time is the work itself.
 double cpuMilliseconds() { return 1e3 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
-
-double medianOf(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 std::vector<std::string> splitList(const std::string& option, const std::string& text) {
   std::vector<std::string> items;
@@ -108,7 +100,7 @@ MatchQuality compareDisparity(const std::vector<float>& matched, const std::vect
   MatchQuality quality;
   quality.valid_fraction = truth_count == 0 ? 0.0 : static_cast<double>(both) / truth_count;
   quality.bad2_fraction = both == 0 ? 0.0 : static_cast<double>(bad) / both;
-  quality.median_error = errors.empty() ? 0.0 : medianOf(errors);
+  quality.median_error = errors.empty() ? 0.0 : bench::median(errors);
   return quality;
 }
 
@@ -197,16 +189,6 @@ MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& pos
   run.voxel_visits_per_frame = static_cast<double>(visits) / poses.size();
   run.rays_per_frame = static_cast<double>(rays) / poses.size();
   return run;
-}
-
-octomap::OcTree makeTree(double resolution) {
-  const OccupancyModel model;
-  octomap::OcTree tree(resolution);
-  tree.setProbHit(model.prob_hit);
-  tree.setProbMiss(model.prob_miss);
-  tree.setClampingThresMin(model.clamp_min);
-  tree.setClampingThresMax(model.clamp_max);
-  return tree;
 }
 
 // The points our integrator casts rays to (same conversion, same sub-sampling), per frame.
@@ -362,8 +344,7 @@ MapContents mapContents(const VoxelMap& map) {
   }
   contents.checksum = hash;
   contents.storage = map.storageStats();
-  contents.block_storage =
-      map.config().block_storage == BlockStorage::kHybrid ? "hybrid" : "dense";
+  contents.block_storage = map.config().block_storage == BlockStorage::kHybrid ? "hybrid" : "dense";
   return contents;
 }
 
@@ -507,8 +488,8 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
     // Interleaved, so that the load of a shared machine falls on all three alike.
     omp_set_num_threads(options.threads);  // insertPointCloud resets it
     VoxelMap map(map_config);
-    octomap::OcTree plain_tree = makeTree(resolution);
-    octomap::OcTree discretized_tree = makeTree(resolution);
+    octomap::OcTree plain_tree = bench::makeOctomapTree(resolution);
+    octomap::OcTree discretized_tree = bench::makeOctomapTree(resolution);
     // Untimed frames first: the visibility method maps unknown space a few voxels deeper per
     // frame (the paper's Fig. 5a), so its cost per frame grows until the view is mapped.
     for (int w = 0; w < options.warmup; ++w) {
@@ -548,12 +529,12 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
       result.walk_only = timeWalkOnly(clouds, poses, resolution);
     }
   }
-  result.ours.ms_per_frame = medianOf(ours_ms);
-  result.plain.ms_per_frame = medianOf(plain_ms);
-  result.discretized.ms_per_frame = medianOf(discretized_ms);
-  result.ours.wall_ms_per_frame = medianOf(wall_ms[0]);
-  result.plain.wall_ms_per_frame = medianOf(wall_ms[1]);
-  result.discretized.wall_ms_per_frame = medianOf(wall_ms[2]);
+  result.ours.ms_per_frame = bench::median(ours_ms);
+  result.plain.ms_per_frame = bench::median(plain_ms);
+  result.discretized.ms_per_frame = bench::median(discretized_ms);
+  result.ours.wall_ms_per_frame = bench::median(wall_ms[0]);
+  result.plain.wall_ms_per_frame = bench::median(wall_ms[1]);
+  result.discretized.wall_ms_per_frame = bench::median(wall_ms[2]);
   return result;
 }
 
@@ -591,10 +572,10 @@ void printCase(const char* prefix, const CaseResult& c) {
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(), m.blocks,
       sizeof(VoxelBlock), m.known_voxels,
       m.blocks == 0 ? 0.0 : static_cast<double>(m.known_voxels) / m.blocks, m.occupied_voxels,
-      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, m.block_storage,
-      m.storage.dense_blocks, m.storage.sparse_blocks, m.storage.sparse_bricks,
-      block_storage / 1024.0, block_storage / c.plain.memory_bytes,
-      m.storage.table_bytes / 1024.0, m.storage.change_log_bytes / 1024.0, c.ours.voxel_visits_per_frame, c.ours.rays_per_frame,
+      m.all_free_blocks, c.octomap_nodes, c.octomap_leaves, m.block_storage, m.storage.dense_blocks,
+      m.storage.sparse_blocks, m.storage.sparse_bricks, block_storage / 1024.0,
+      block_storage / c.plain.memory_bytes, m.storage.table_bytes / 1024.0,
+      m.storage.change_log_bytes / 1024.0, c.ours.voxel_visits_per_frame, c.ours.rays_per_frame,
       c.walk_only.cpu_ms_per_frame, c.walk_only.steps_per_frame,
       static_cast<unsigned long long>(m.checksum));
   std::fflush(stdout);
@@ -640,7 +621,7 @@ void drawPicture(const StereoView& view, const StereoView& truth, const Options&
   map_config.block_storage = BlockStorage::kHybrid;
   VoxelMap map(map_config);
   runOurs(view, poses, integrator, &map);
-  octomap::OcTree tree = makeTree(options.picture_resolution);
+  octomap::OcTree tree = bench::makeOctomapTree(options.picture_resolution);
   runOctomap(octomapClouds(view, poses, integrator), poses, false, &tree);
   // Depth range of the true surface, for the colour scale.
   const StereoPoints points = disparityToPoints(truth.view(), truth.camera, {});

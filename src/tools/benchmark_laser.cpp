@@ -27,6 +27,7 @@
 
 #include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/sensors/carmen_log.h"
+#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
@@ -39,27 +40,11 @@ cv::Mat laserRasterImage(const LogOddsRaster& raster,
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using bench::Clock;
+using bench::median;
+using bench::millisecondsSince;
+using bench::processCpuMilliseconds;
 constexpr double kPi = 3.14159265358979323846;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// CPU time of the whole process (all threads), ms: on a machine shared with other work the wall
-// time of a scan also counts the time its threads waited for a core.
-double processCpuMilliseconds() {
-  timespec now{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-  return now.tv_sec * 1e3 + now.tv_nsec * 1e-6;
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 struct ErrorStats {
   double mean_all = 0.0;

@@ -23,41 +23,21 @@
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/occupied_voxel_cache.h"
 #include "occupancy_fusion/sim/deterministic_random.h"
+#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
+using bench::Clock;
+using bench::median;
+using bench::millisecondsSince;
 
 // "1e5,1e6" -> {1e5, 1e6}; UsageError naming the option on anything else.
 std::vector<double> positiveList(const CommandLine& args, const std::string& option,
                                  const std::string& fallback) {
-  const std::string text = args.value(option, fallback);
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    std::istringstream parser(item);
-    double value = 0.0;
-    if (!(parser >> value) || !parser.eof() || !(value >= 1.0)) {
-      throw UsageError("--" + option + " needs numbers >= 1 separated by commas, got '" + text +
-                       "'");
-    }
-    values.push_back(value);
-  }
-  if (values.empty()) throw UsageError("--" + option + " is empty");
-  return values;
+  return bench::parseNumberList<double>(option, args.value(option, fallback), "numbers >= 1",
+                                        [](double value) { return value >= 1.0; });
 }
 
 constexpr int kStackBlocks = 4;  // blocks per column of the synthetic map (1.6 m at 5 cm)
