@@ -52,6 +52,14 @@ void expectRejected(const PyramidDepthConfig& config, const std::string& field) 
   }
 }
 
+// The default config with one field changed by `change` must be rejected, naming that field.
+template <typename Change>
+void expectDefaultRejectedWith(Change change, const std::string& field) {
+  PyramidDepthConfig config;
+  change(config);
+  expectRejected(config, "PyramidDepthConfig." + field);
+}
+
 TEST(PyramidDepthConfig, RejectsBadParametersNamingTheField) {
   EXPECT_NO_THROW(PyramidDepthConfig().validate());
   PyramidDepthConfig config;
@@ -62,24 +70,14 @@ TEST(PyramidDepthConfig, RejectsBadParametersNamingTheField) {
   EXPECT_NO_THROW(config.validate());
   config.sigma = 0.79;  // 0.5050: invalid
   expectRejected(config, "sigma");
-  config = PyramidDepthConfig();
-  config.sigma = 0.0;
-  expectRejected(config, "PyramidDepthConfig.sigma");
-  config = PyramidDepthConfig();
-  config.k = -0.1;
-  expectRejected(config, "PyramidDepthConfig.k");
-  config = PyramidDepthConfig();
-  config.sigma_quadratic = -0.01;
-  expectRejected(config, "PyramidDepthConfig.sigma_quadratic");
-  config = PyramidDepthConfig();
-  config.max_range = 0.05;
-  expectRejected(config, "PyramidDepthConfig.max_range");
-  config = PyramidDepthConfig();
-  config.min_range = -1.0;
-  expectRejected(config, "PyramidDepthConfig.min_range");
-  config = PyramidDepthConfig();
-  config.unknown_behind_sigmas = 0.0;
-  expectRejected(config, "PyramidDepthConfig.unknown_behind_sigmas");
+  expectDefaultRejectedWith([](PyramidDepthConfig& c) { c.sigma = 0.0; }, "sigma");
+  expectDefaultRejectedWith([](PyramidDepthConfig& c) { c.k = -0.1; }, "k");
+  expectDefaultRejectedWith([](PyramidDepthConfig& c) { c.sigma_quadratic = -0.01; },
+                            "sigma_quadratic");
+  expectDefaultRejectedWith([](PyramidDepthConfig& c) { c.max_range = 0.05; }, "max_range");
+  expectDefaultRejectedWith([](PyramidDepthConfig& c) { c.min_range = -1.0; }, "min_range");
+  expectDefaultRejectedWith([](PyramidDepthConfig& c) { c.unknown_behind_sigmas = 0.0; },
+                            "unknown_behind_sigmas");
   config = PyramidDepthConfig();
   config.max_pyramid_levels = 0;
   expectRejected(config, "PyramidDepthConfig.max_pyramid_levels");
@@ -117,12 +115,18 @@ CameraIntrinsics flatCamera(int width, int height) {
   return camera;
 }
 
+// A 4 x 4 depth image, row-major, v down, with invalid pixels (NaN, 0) and one beyond the
+// pyramids' max_range of 20 m.
+std::vector<float> mixedDepthImage() {
+  return {1.0f, 3.9f,  7.0f,  0.0f,   //
+          5.0f, 4.5f,  kNaN,  kNaN,   //
+          2.1f, 9.0f,  50.0f, 0.0f,   // 50 m is beyond max_range
+          6.0f, 1.85f, kNaN,  0.0f};  //
+}
+
 TEST(DistancePyramid, Eq10KeepsTheMeasurementClosestToEachLayersDistance) {
-  // 4 x 4 image, t0 = 8 so t1 = 4 and t2 = 2. Row-major, v down.
-  const std::vector<float> depth = {1.0f, 3.9f,  7.0f,  0.0f,   //
-                                    5.0f, 4.5f,  kNaN,  kNaN,   //
-                                    2.1f, 9.0f,  50.0f, 0.0f,   // 50 m is beyond max_range
-                                    6.0f, 1.85f, kNaN,  0.0f};  //
+  // t0 = 8 so t1 = 4 and t2 = 2.
+  const std::vector<float> depth = mixedDepthImage();
   const DepthImageView view{4, 4, depth.data()};
   const DistancePyramid closest(view, flatCamera(4, 4), 8.0, 3, 20.0,
                                 PyramidSelection::kClosestToThreshold);
@@ -150,10 +154,7 @@ TEST(DistancePyramid, Eq10KeepsTheMeasurementClosestToEachLayersDistance) {
 }
 
 TEST(DistancePyramid, LayersFinerThanAnyInformedVoxelReadsAreLeftInvalid) {
-  const std::vector<float> depth = {1.0f, 3.9f,  7.0f,  0.0f,   //
-                                    5.0f, 4.5f,  kNaN,  kNaN,   //
-                                    2.1f, 9.0f,  50.0f, 0.0f,   // 50 m is beyond max_range
-                                    6.0f, 1.85f, kNaN,  0.0f};  //
+  const std::vector<float> depth = mixedDepthImage();
   const DepthImageView view{4, 4, depth.data()};
   double farthest_seen = 0.0;
   // Reach 9 / 8 m <= t_2 = 2 m: every informed voxel reads layer 2 (and layer 0 beyond t_0),
