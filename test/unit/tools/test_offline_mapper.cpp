@@ -52,13 +52,19 @@ class OfflineMapperTest : public ::testing::Test {
     std::vector<std::unique_ptr<SimulatedSensor>> sensors;
     sensors.push_back(std::make_unique<PointCloudCameraSensor>(PointCloudCameraConfig()));
     dir_ = makeRoomRecordingDir(configText(), kFrames, sensors);
-    mapped_ = runTool(OFFLINE_MAPPER_PATH,
-                      "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" +
-                          (dir_ / "room.bag").string() + "' --output-dir '" +
-                          (dir_ / "out").string() + "' --name room --quiet",
-                      dir_);
+    mapped_ = mapBag(dir_ / "room.bag", "out", " --name room");
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  // offline_mapper with mapper.yaml on `bag`, quiet, writing to <dir_>/<output_dir>.
+  static RunResult mapBag(const fs::path& bag, const std::string& output_dir,
+                          const std::string& extra_options = "") {
+    return runTool(OFFLINE_MAPPER_PATH,
+                   "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + bag.string() +
+                       "' --output-dir '" + (dir_ / output_dir).string() + "' --quiet" +
+                       extra_options,
+                   dir_);
+  }
 
   static fs::path dir_;
   static RunResult mapped_;
@@ -170,11 +176,7 @@ TEST_F(OfflineMapperTest, SkipsAndCountsCloudsWithoutTransform) {
   fs::copy_file(dir_ / "room.bag", bag, fs::copy_options::overwrite_existing);
   appendUnplaceableClouds(bag);
   const RunResult result =
-      runTool(OFFLINE_MAPPER_PATH,
-              "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + bag.string() +
-                  "' --output-dir '" + (dir_ / "skip").string() +
-                  "' --quiet --set sensor_model/max_rnage=3 --set occupancy_max_z=1.5",
-              dir_);
+      mapBag(bag, "skip", " --set sensor_model/max_rnage=3 --set occupancy_max_z=1.5");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.out.find(std::to_string(kFrames) + " point_cloud integrated, 2 skipped"),
             std::string::npos)
@@ -204,11 +206,7 @@ TEST_F(OfflineMapperTest, SkipsACloudWithTheStampOfTheOneBeforeIt) {
       bag.write("/cloud_in", stamp, cloudFromPoints(points, "camera_optical_frame", stamp));
     }
   }
-  const RunResult result =
-      runTool(OFFLINE_MAPPER_PATH,
-              "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + bag_path.string() +
-                  "' --output-dir '" + (dir_ / "duplicate").string() + "' --quiet",
-              dir_);
+  const RunResult result = mapBag(bag_path, "duplicate");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.out.find(std::to_string(kFrames + 1) + " point_cloud integrated, 1 skipped"),
             std::string::npos)
@@ -238,11 +236,7 @@ TEST_F(OfflineMapperTest, StopsWhereTheRecordingsTimeJumpsBack) {
     bag.write("/cloud_in", replay + ros::Duration(0.1),
               cloudFromPoints(points, "camera_optical_frame", stamp));
   }
-  const RunResult result =
-      runTool(OFFLINE_MAPPER_PATH,
-              "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + bag_path.string() +
-                  "' --output-dir '" + (dir_ / "looped").string() + "' --quiet",
-              dir_);
+  const RunResult result = mapBag(bag_path, "looped");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.out.find(std::to_string(kFrames) + " point_cloud integrated"), std::string::npos)
       << result.out;
@@ -250,11 +244,7 @@ TEST_F(OfflineMapperTest, StopsWhereTheRecordingsTimeJumpsBack) {
 }
 
 TEST_F(OfflineMapperTest, FailsWhenNoFrameCanBePlaced) {
-  const RunResult result = runTool(
-      OFFLINE_MAPPER_PATH,
-      "--config '" + (dir_ / "mapper.yaml").string() + "' --bag '" + (dir_ / "room.bag").string() +
-          "' --output-dir '" + (dir_ / "none").string() + "' --quiet --set frame_id=nowhere",
-      dir_);
+  const RunResult result = mapBag(dir_ / "room.bag", "none", " --set frame_id=nowhere");
   EXPECT_EQ(result.exit_code, 1) << result.err;
   EXPECT_NE(result.out.find("frames: 0 integrated, " + std::to_string(kFrames) + " skipped"),
             std::string::npos)
