@@ -11,7 +11,7 @@ constexpr int kSide = 400;
 
 }  // namespace
 
-AxisProfile fig5AxisProfile(DepthMethod method, double edge_offset) {
+AxisProfile fig5AxisProfile(DepthMethod method, double edge_offset, int finer_layers) {
   const bool half = std::abs(edge_offset - std::round(edge_offset)) > 0.25;
   CameraIntrinsics camera;
   camera.width = camera.height = kSide;
@@ -27,6 +27,7 @@ AxisProfile fig5AxisProfile(DepthMethod method, double edge_offset) {
   PyramidDepthConfig config;  // k = sigma = 0.6, the paper's values
   config.method = method;
   config.max_range = 20.0;
+  config.finer_layers = finer_layers;
   const PyramidDepthIntegrator integrator(config);
   // The camera sits at the centre of a voxel column, so the axis voxels are centred on it.
   Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();

@@ -202,10 +202,11 @@ const std::vector<Workload>& workloads() {
         "method", "image", "finer_layers"},
        runDepth},
       {"depth-fig5",
-       "[--output PNG] [--sweep_max PX]\n"
+       "[--output PNG] [--sweep_max PX] [--finer_layers F]\n"
        "      Pirker et al.'s Fig. 5: occupancy along the optical axis (obstacles at 6 and 10 m)\n"
-       "      for ideal, pyramid and Andert, errors against ideal, plot; edge moved off the axis",
-       {"output", "sweep_max"},
+       "      for ideal, pyramid and Andert, errors against ideal, plot; edge moved off the axis;\n"
+       "      F > 0 adds the pyramid with depth/finer_layers F (not the paper) to all of it",
+       {"output", "sweep_max", "finer_layers"},
        runDepthFig5},
       {"depth-accuracy",
        "[--scenes box,spheres] [--methods pyramid,andert,ideal] [--views N] [--resolution R]\n"

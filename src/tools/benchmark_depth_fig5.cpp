@@ -78,17 +78,24 @@ cv::Mat plotProfiles(const std::vector<Curve>& curves) {
 
 int runDepthFig5(const CommandLine& args) {
   const std::string output = args.value("output", "");
+  // depth/finer_layers (not the paper): 0 leaves it out, F > 0 adds the pyramid with it.
+  const int finer_layers = args.intValue("finer_layers", 0);
+  if (finer_layers < 0 || finer_layers > 4) throw UsageError("--finer_layers must be in [0, 4]");
+  const bool with_finer = finer_layers > 0;
   const Profile ideal = fig5AxisProfile(DepthMethod::kIdeal, 0.0);
   const Profile pyramid = fig5AxisProfile(DepthMethod::kPyramid, 0.0);
   const Profile andert = fig5AxisProfile(DepthMethod::kAndert, 0.0);
+  const Profile finer =
+      with_finer ? fig5AxisProfile(DepthMethod::kPyramid, 0.0, finer_layers) : Profile();
   std::printf(
       "# Fig. 5: obstacles at 6 m (left of the edge) and 10 m, edge on the optical axis,\n"
       "# 400 x 400 px, f = 400, r = 0.1 m, k = sigma = 0.6; p = 0.5 where unknown\n");
-  std::printf("# z[m]  ideal   pyramid andert\n");
+  std::printf("# z[m]  ideal   pyramid andert%s\n", with_finer ? "  pyramid_finer" : "");
   for (std::size_t i = 0; i < ideal.distance.size(); ++i) {
-    std::printf("%6.2f  %.4f  %.4f  %.4f\n", ideal.distance[i],
-                profileProbability(ideal.log_odds[i]), profileProbability(pyramid.log_odds[i]),
-                profileProbability(andert.log_odds[i]));
+    std::printf("%6.2f  %.4f  %.4f  %.4f", ideal.distance[i], profileProbability(ideal.log_odds[i]),
+                profileProbability(pyramid.log_odds[i]), profileProbability(andert.log_odds[i]));
+    if (with_finer) std::printf("  %.4f", profileProbability(finer.log_odds[i]));
+    std::printf("\n");
   }
   const ProfileErrors pyramid_errors = errorsAgainstIdeal(ideal, pyramid);
   const ProfileErrors andert_errors = errorsAgainstIdeal(ideal, andert);
@@ -96,6 +103,13 @@ int runDepthFig5(const CommandLine& args) {
               pyramid_errors.mean, pyramid_errors.max);
   std::printf("depth-fig5 method=andert edge_offset_px=0 mean_abs_error=%.4f max_abs_error=%.4f\n",
               andert_errors.mean, andert_errors.max);
+  if (with_finer) {
+    const ProfileErrors finer_errors = errorsAgainstIdeal(ideal, finer);
+    std::printf(
+        "depth-fig5 method=pyramid finer_layers=%d edge_offset_px=0 mean_abs_error=%.4f "
+        "max_abs_error=%.4f\n",
+        finer_layers, finer_errors.mean, finer_errors.max);
+  }
 
   // The edge moved off the axis: the axis voxels then see only the near obstacle in the ideal
   // model once their footprint (t_0 / z pixels) no longer reaches the edge.
@@ -108,17 +122,27 @@ int runDepthFig5(const CommandLine& args) {
         errorsAgainstIdeal(ideal_off, fig5AxisProfile(DepthMethod::kAndert, offset));
     std::printf(
         "depth-fig5-offaxis edge_offset_px=%.1f pyramid_mean=%.4f pyramid_max=%.4f "
-        "andert_mean=%.4f andert_max=%.4f closer=%s (tie: means within 1e-4)\n",
+        "andert_mean=%.4f andert_max=%.4f closer=%s (tie: means within 1e-4)",
         offset, p.mean, p.max, a.mean, a.max,
         std::abs(p.mean - a.mean) < 1e-4 ? "tie"
         : p.mean < a.mean                ? "pyramid"
                                          : "andert");
+    if (with_finer) {
+      const ProfileErrors f = errorsAgainstIdeal(
+          ideal_off, fig5AxisProfile(DepthMethod::kPyramid, offset, finer_layers));
+      std::printf(" finer_mean=%.4f finer_max=%.4f", f.mean, f.max);
+    }
+    std::printf("\n");
   }
 
   if (!output.empty()) {
-    const cv::Mat plot = plotProfiles({{&ideal, cv::Scalar(170, 170, 170), "ideal (Eq. 8-9)", 7},
-                                       {&pyramid, cv::Scalar(200, 80, 0), "pyramid (Eq. 10-17)", 2},
-                                       {&andert, cv::Scalar(0, 0, 220), "Andert (min depth)", 2}});
+    std::vector<Curve> curves = {{&ideal, cv::Scalar(170, 170, 170), "ideal (Eq. 8-9)", 7},
+                                 {&pyramid, cv::Scalar(200, 80, 0), "pyramid (Eq. 10-17)", 2},
+                                 {&andert, cv::Scalar(0, 0, 220), "Andert (min depth)", 2}};
+    const std::string finer_label =
+        "pyramid, finer_layers " + std::to_string(finer_layers) + " (not the paper)";
+    if (with_finer) curves.push_back({&finer, cv::Scalar(0, 160, 0), finer_label, 2});
+    const cv::Mat plot = plotProfiles(curves);
     if (!cv::imwrite(output, plot)) throw UsageError("cannot write --output " + output);
     std::printf("# plot written to %s\n", output.c_str());
   }

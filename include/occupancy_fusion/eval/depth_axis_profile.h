@@ -18,7 +18,8 @@ struct AxisProfile {
 
 // The edge lies `edge_offset` pixels right of the optical axis (a multiple of 0.5: the edge runs
 // between pixel columns, so the principal point moves by half a pixel for half-integer offsets).
-AxisProfile fig5AxisProfile(DepthMethod method, double edge_offset = 0.0);
+// finer_layers: PyramidDepthConfig's option of that name (0, the paper, by default).
+AxisProfile fig5AxisProfile(DepthMethod method, double edge_offset = 0.0, int finer_layers = 0);
 
 // Occupancy probability of a profile entry (Eq. 5); unknown reads as 0.5.
 double profileProbability(const std::optional<float>& log_odds);

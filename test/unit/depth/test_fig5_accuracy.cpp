@@ -66,5 +66,26 @@ TEST(Fig5Accuracy, PyramidIsClearlyCloserToIdealThanAndert) {
   EXPECT_GT(andert_errors.mean, 0.05);  // the baseline really misses the far obstacle
 }
 
+TEST(Fig5Accuracy, FinerLayersOptionStaysCloseToIdealOnTheAxis) {
+  // depth/finer_layers 1 (not the paper) halves Eq. 11's t_0, so each axis voxel reads cells of
+  // half the size: still both obstacles (the edge runs through the voxel's footprint), in the
+  // ideal's proportions. The option must reach the integrator (a different profile) and keep the
+  // paper's accuracy here.
+  const Profile ideal = fig5AxisProfile(DepthMethod::kIdeal);
+  const Profile pyramid = fig5AxisProfile(DepthMethod::kPyramid);
+  const Profile finer = fig5AxisProfile(DepthMethod::kPyramid, 0.0, 1);
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < pyramid.log_odds.size(); ++i) {
+    if (pyramid.log_odds[i] != finer.log_odds[i]) ++differing;
+  }
+  EXPECT_GT(differing, 10u);
+  const ProfileErrors pyramid_errors = errorsAgainstIdeal(ideal, pyramid);
+  const ProfileErrors finer_errors = errorsAgainstIdeal(ideal, finer);
+  std::printf("  finer_layers 1: mean %.5f max %.5f (paper: %.5f, %.5f)\n", finer_errors.mean,
+              finer_errors.max, pyramid_errors.mean, pyramid_errors.max);
+  EXPECT_LE(finer_errors.mean, pyramid_errors.mean);
+  EXPECT_LE(finer_errors.max, pyramid_errors.max);
+}
+
 }  // namespace
 }  // namespace occupancy_fusion
