@@ -197,8 +197,9 @@ LayerFilePaths writeLayerFiles(const LogOddsRaster& raster, const std::string& p
         << "log_odds: " << std::filesystem::path(paths.npy).filename().string() << "\n"
         << "resolution: " << numberText(raster.resolution) << "\n"
         << "origin_cell: [" << raster.origin_cell.x() << ", " << raster.origin_cell.y() << "]\n"
-        << "origin: [" << numberText(raster.origin_cell.x() * raster.resolution) << ", "
-        << numberText(raster.origin_cell.y() * raster.resolution) << "]\n"
+        << std::setprecision(15)  // origin is for readers: -23.4, not -23.400000000000002
+        << "origin: [" << raster.origin_cell.x() * raster.resolution << ", "
+        << raster.origin_cell.y() * raster.resolution << "]\n"
         << "width: " << raster.width << "\n"
         << "height: " << raster.height << "\n";
   });
