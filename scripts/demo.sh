@@ -11,6 +11,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export PATH="/usr/bin:/bin:$PATH"
 # OpenMP threads sleep while they wait: spinning stalls frames when the cores are shared.
 export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
+# ... after a few microseconds of spinning (libgomp), which bridges a frame's parallel regions.
+export GOMP_SPINCOUNT="${GOMP_SPINCOUNT:-3000}"
 out="$(realpath -m "${1:-$root/output/demo}")"
 if [[ -z "${DEMO_BUILD_DIR:-}" ]]; then
   "$root/scripts/install_dependencies.sh"

@@ -12,6 +12,8 @@ set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export PATH="/usr/bin:/bin:$PATH"
 export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
+# ... after a few microseconds of spinning (libgomp), which bridges a frame's parallel regions.
+export GOMP_SPINCOUNT="${GOMP_SPINCOUNT:-3000}"
 duration="${1:-600}"
 out="$(realpath -m "${2:-$root/output/soak}")"
 if [[ -z "${SOAK_BUILD_DIR:-}" ]]; then
