@@ -9,9 +9,9 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "occupancy_fusion/map/saved_map.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
-#include "occupancy_fusion/ros/saved_map.h"
 #include "occupancy_fusion/ros/shared_map_access.h"
 
 namespace occupancy_fusion {
@@ -73,7 +73,7 @@ class MapServer : public nodelet::Nodelet {
   void loadMap(const std::string& path, SharedMap* map) {
     ResumedMap resumed;
     try {
-      resumed = resumeSavedMap(path, map);
+      resumed = resumeSavedMap(path, &map->voxels(), &map->layer());
     } catch (const std::exception& error) {
       throw std::runtime_error("load_map: cannot resume from '" + path + "': " + error.what() +
                                " (fix the path, or set load_map to \"\" to start an empty map)");

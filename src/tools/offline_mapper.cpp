@@ -67,6 +67,10 @@ Parameters and output:
   --namespace NS       take the parameters from section NS of each file (e.g. a node name)
   --set KEY=VALUE      override one parameter, e.g. --set sensor_model/max_range=4 (repeatable)
   --output-dir DIR     where the map files go (created if needed)
+  --load-map FILE      start from a saved map instead of an empty one: a .ot (every log-odds)
+                       or .bt (labels) of the map's resolution, and the laser layer from the
+                       .laser.yaml / .laser.npy beside it when present (as the MapServer's
+                       load_map; what this tool and ~save_map write)
   --name NAME          base name of the map files (default: map)
   --carmen-max-scans N read at most N scans of each CARMEN log (default: all)
   --single-scan N      also write the grid of laser scan N alone (0-based, in reading order) in
@@ -94,6 +98,7 @@ struct Options {
   double voxel_picture_max_z = 1e9;  // m
   std::string output_dir;
   std::string name;
+  std::string load_map;  // empty: start with an empty map
   bool quiet = false;
 };
 
@@ -124,6 +129,7 @@ Options parseOptions(const CommandLine& line) {
   options.single_scan = line.intValue("single-scan", -1);
   options.output_dir = line.required("output-dir");
   options.name = line.value("name", "map");
+  options.load_map = line.value("load-map", "");
   options.quiet = line.has("quiet");
   options.voxel_picture_max_z = line.doubleValue("voxel-picture-max-z", 1e9);
   if (options.name.empty() || options.name.find('/') != std::string::npos) {
@@ -141,6 +147,7 @@ Options parseOptions(const CommandLine& line) {
     throw UsageError("--single-scan must be >= 0");
   }
   requireExisting(options.config_paths, false);
+  if (!options.load_map.empty()) requireExisting({options.load_map}, false);
   requireExisting(options.bag_paths, false);
   requireExisting(options.carmen_logs, false);
   requireExisting(options.depth_folders, true);
@@ -323,7 +330,7 @@ Setup prepare(int argc, char** argv) {
       argc, argv,
       {"config", "namespace", "set", "bag", "cloud-topic", "depth-topic", "disparity-topic",
        "scan-topic", "depth-folder", "middlebury-folder", "carmen", "carmen-max-scans",
-       "single-scan", "output-dir", "name", "voxel-picture-max-z"},
+       "single-scan", "output-dir", "name", "voxel-picture-max-z", "load-map"},
       {"quiet", "help"});
   Setup setup;
   setup.options = parseOptions(line);
@@ -374,11 +381,26 @@ bool writeSingleScan(const Setup& setup, const ScanPicker& picker) {
   return true;
 }
 
+// --load-map: a file that cannot be resumed is a bad input file (exit 2), not a mapping failure.
+void resume(const std::string& path, RecordingMapper* mapper) {
+  ResumedMap resumed;
+  try {
+    resumed = mapper->resumeFrom(path);
+  } catch (const std::runtime_error& error) {
+    throw UsageError(std::string("--load-map: cannot resume: ") + error.what());
+  }
+  std::cout << "offline_mapper: resumed " << resumed.known_voxels << " voxels"
+            << (resumed.labels_only ? " (labels only: a .bt file)" : "") << " and "
+            << resumed.layer_cells << " laser layer cells from " << path
+            << (resumed.layer_found ? "" : " (no laser layer files beside it)") << "\n";
+}
+
 int run(int argc, char** argv) {
   Setup setup = prepare(argc, argv);
   std::size_t total_frames = 0;
   for (const auto& reader : setup.readers) total_frames += reader->frameCount();
   RecordingMapper mapper(setup.config, nullptr, &std::cerr);
+  if (!setup.options.load_map.empty()) resume(setup.options.load_map, &mapper);
   ProgressPrinter progress(total_frames, &mapper, setup.options.quiet);
   ScanPicker picker(&mapper, setup.options.single_scan);
   std::size_t frames_before = 0;

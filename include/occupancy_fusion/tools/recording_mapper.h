@@ -16,6 +16,7 @@
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/saved_map.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/params/laser_config_reader.h"
 #include "occupancy_fusion/params/parameter_source.h"
@@ -93,6 +94,12 @@ class RecordingMapper : public FrameConsumer {
   // The fused 2D view over config().fused_grid's height band.
   OccupancyRaster fusedGrid() const;
   const RecordingStatistics& statistics() const { return statistics_; }
+
+  // Starts from a saved map (a .ot or .bt and the laser layer files beside it; see saved_map.h),
+  // before the first frame. Throws std::runtime_error naming the file and what is wrong.
+  ResumedMap resumeFrom(const std::string& path) {
+    return resumeSavedMap(path, &map_, &laser_layer_);
+  }
 
  private:
   // The sensor-to-map transform, or nullopt after counting the frame as skipped (also a frame

@@ -17,8 +17,8 @@
 #include "../test_folder.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/layer_files.h"
+#include "occupancy_fusion/map/saved_map.h"
 #include "occupancy_fusion/ros/map_publisher.h"
-#include "occupancy_fusion/ros/saved_map.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -90,7 +90,7 @@ TEST_F(SavedMap, ResumesVoxelsAndLaserLayerBitExact) {
   ASSERT_GT(saved_.layer().knownCellCount(), 1000u);
 
   SharedMap resumed(mapConfig());
-  const ResumedMap report = resumeSavedMap(prefix() + ".ot", &resumed);
+  const ResumedMap report = resumeSavedMap(prefix() + ".ot", &resumed.voxels(), &resumed.layer());
   EXPECT_TRUE(report.layer_found);
   EXPECT_FALSE(report.labels_only);
   EXPECT_EQ(report.layer_yaml, prefix() + ".laser.yaml");
@@ -115,7 +115,7 @@ TEST_F(SavedMap, WithoutLayerFilesTheVoxelsResumeAndTheLayerStartsEmpty) {
   fs::remove(prefix() + ".laser.yaml");
   fs::remove(prefix() + ".laser.npy");
   SharedMap resumed(mapConfig());
-  const ResumedMap report = resumeSavedMap(prefix() + ".ot", &resumed);
+  const ResumedMap report = resumeSavedMap(prefix() + ".ot", &resumed.voxels(), &resumed.layer());
   EXPECT_FALSE(report.layer_found);
   EXPECT_EQ(report.layer_cells, 0u);
   EXPECT_EQ(voxelMismatches(saved_.voxels(), resumed.voxels()), 0u);
@@ -131,7 +131,7 @@ TEST_F(SavedMap, BadLayerFilesStopTheResumeBeforeTheMapIsTouched) {
                 fs::copy_options::overwrite_existing);
   SharedMap resumed(mapConfig());
   try {
-    resumeSavedMap(prefix() + ".ot", &resumed);
+    resumeSavedMap(prefix() + ".ot", &resumed.voxels(), &resumed.layer());
     ADD_FAILURE() << "a layer array of another save was accepted";
   } catch (const std::runtime_error& error) {
     EXPECT_NE(std::string(error.what()).find(prefix() + ".laser.npy"), std::string::npos)
@@ -150,7 +150,7 @@ TEST_F(SavedMap, BadLayerFilesStopTheResumeBeforeTheMapIsTouched) {
   fs::copy_file(folder_ / "coarse.laser.npy", prefix() + ".laser.npy",
                 fs::copy_options::overwrite_existing);
   try {
-    resumeSavedMap(prefix() + ".ot", &resumed);
+    resumeSavedMap(prefix() + ".ot", &resumed.voxels(), &resumed.layer());
     ADD_FAILURE() << "a layer of another resolution was accepted";
   } catch (const std::runtime_error& error) {
     EXPECT_NE(std::string(error.what()).find("resolution"), std::string::npos) << error.what();

@@ -1,4 +1,4 @@
-#include "occupancy_fusion/ros/saved_map.h"
+#include "occupancy_fusion/map/saved_map.h"
 
 #include <cmath>
 #include <filesystem>
@@ -43,34 +43,37 @@ std::string layerYamlBeside(const std::string& octomap_path) {
   return layerFilePaths(prefix.string()).yaml;
 }
 
-ResumedMap resumeSavedMap(const std::string& path, SharedMap* map) {
+ResumedMap resumeSavedMap(const std::string& path, VoxelMap* voxels, GridLayer2D* layer) {
   ResumedMap resumed;
-  const std::unique_ptr<octomap::OcTree> tree = readOcTreeFile(path, map->voxels().model());
+  const std::unique_ptr<octomap::OcTree> tree = readOcTreeFile(path, voxels->model());
   try {
     requireCompleteTree(path, *tree);
   } catch (const std::exception& error) {
     throw std::runtime_error(path + ": " + error.what());
   }
   resumed.layer_yaml = layerYamlBeside(path);
-  std::optional<LogOddsRaster> layer;
+  std::optional<LogOddsRaster> saved_layer;
   if (std::filesystem::exists(resumed.layer_yaml)) {
-    layer = readLayerFiles(resumed.layer_yaml);
-    if (std::abs(layer->resolution - map->layer().resolution()) >
-        1e-9 * map->layer().resolution()) {
+    saved_layer = readLayerFiles(resumed.layer_yaml);
+    if (std::abs(saved_layer->resolution - layer->resolution()) > 1e-9 * layer->resolution()) {
       throw std::runtime_error(resumed.layer_yaml + ": resolution " +
-                               std::to_string(layer->resolution) + " m, the map's is " +
-                               std::to_string(map->layer().resolution()) + " m");
+                               std::to_string(saved_layer->resolution) + " m, the map's is " +
+                               std::to_string(layer->resolution()) + " m");
     }
   }
-  resumed.known_voxels_before = map->voxels().knownVoxelCount();
-  fromOcTree(*tree, &map->voxels());  // one write: the change log reports every loaded block
-  resumed.known_voxels = map->voxels().knownVoxelCount();
+  resumed.known_voxels_before = voxels->knownVoxelCount();
+  try {
+    fromOcTree(*tree, voxels);  // one write: the change log reports every loaded block
+  } catch (const std::invalid_argument& error) {  // another resolution, too many voxels
+    throw std::runtime_error(path + ": " + error.what());
+  }
+  resumed.known_voxels = voxels->knownVoxelCount();
   resumed.labels_only = hasExtension(path, ".bt");
-  if (layer) {
-    map->layer().importRaster(*layer);  // one write, as the voxels
+  if (saved_layer) {
+    layer->importRaster(*saved_layer);  // one write, as the voxels
     resumed.layer_found = true;
   }
-  resumed.layer_cells = map->layer().knownCellCount();
+  resumed.layer_cells = layer->knownCellCount();
   return resumed;
 }
 

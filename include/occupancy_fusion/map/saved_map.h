@@ -1,12 +1,13 @@
-// Resuming a saved map (the MapServer's load_map): the voxels from an OctoMap file and, beside it,
-// the 2D laser layer from <prefix>.laser.yaml / .laser.npy (see layer_files.h), as ~save_map and
-// save_on_shutdown write them (saveMapFiles).
+// Resuming a saved map (the MapServer's load_map, offline_mapper's --load-map): the voxels from an
+// OctoMap file and, beside it, the 2D laser layer from <prefix>.laser.yaml / .laser.npy (see
+// layer_files.h), as ~save_map, save_on_shutdown and offline_mapper write them.
 #pragma once
 
 #include <cstddef>
 #include <string>
 
-#include "occupancy_fusion/ros/map_registry.h"
+#include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
 
@@ -22,10 +23,10 @@ struct ResumedMap {
 // The laser layer's yaml that belongs to a saved map file: <path without .ot/.bt>.laser.yaml.
 std::string layerYamlBeside(const std::string& octomap_path);
 
-// Reads `path` (.ot: every log-odds exactly; .bt: labels) into the map's voxels in one write, and
-// the layer files beside it, when present, into its 2D layer. Both files are read and checked
-// before the map is touched. Throws std::runtime_error naming the file and what is wrong (missing,
-// truncated, another resolution, damaged layer files).
-ResumedMap resumeSavedMap(const std::string& path, SharedMap* map);
+// Reads `path` (.ot: every log-odds exactly; .bt: labels) into `voxels` in one write, and the
+// layer files beside it, when present, into `layer`. Both files are read and checked before either
+// is touched. Throws std::runtime_error naming the file and what is wrong (missing, truncated,
+// another resolution, damaged layer files).
+ResumedMap resumeSavedMap(const std::string& path, VoxelMap* voxels, GridLayer2D* layer);
 
 }  // namespace occupancy_fusion
