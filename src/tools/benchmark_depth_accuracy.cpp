@@ -29,16 +29,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::vector<std::string> splitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 struct View {
   int sweep_index = 0;
   Eigen::Isometry3d T_world_camera;
@@ -377,7 +367,7 @@ int runDepthAccuracy(const CommandLine& args) {
       options.resolution, config.k, config.sigma, config.sigma_quadratic,
       config.unknown_behind_sigmas, config.finer_layers, clamp.c_str(), omp_get_max_threads());
   std::fflush(stdout);
-  for (const std::string& scene_name : splitList(args.value("scenes", "box,spheres"))) {
+  for (const std::string& scene_name : args.listValue("scenes", "box,spheres")) {
     if (scene_name != "box" && scene_name != "spheres") {
       throw UsageError("--scenes takes box and/or spheres, not '" + scene_name + "'");
     }
@@ -396,7 +386,7 @@ int runDepthAccuracy(const CommandLine& args) {
     // For the CSV: whether the other subset (the integrated views) observed each point too.
     const std::vector<bool> reference =
         observe_count == view_count ? observed : observedBy(samples, views, camera, tolerance);
-    for (const std::string& method : splitList(args.value("methods", "pyramid,andert,ideal"))) {
+    for (const std::string& method : args.listValue("methods", "pyramid,andert,ideal")) {
       config.method = depthMethodFromString(method);
       mapAndScore(scene_name.c_str(), scene, views, camera, config, options, samples, observed,
                   reference);

@@ -54,19 +54,8 @@ SimulatedRecordingConfig parseConfig(const CommandLine& line) {
   return config;
 }
 
-std::vector<std::string> splitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 std::vector<std::unique_ptr<SimulatedSensor>> parseSensors(const CommandLine& line) {
-  const std::vector<std::string> kinds =
-      splitList(line.value("sensors", "cloud,depth,disparity,scan"));
+  const std::vector<std::string> kinds = line.listValue("sensors", "cloud,depth,disparity,scan");
   if (kinds.empty()) throw UsageError("--sensors: give at least one sensor kind");
   SimulatedSensorOptions options;
   options.disparity_patch_probability = line.doubleValue("disparity-patches", 0.0);

@@ -33,6 +33,8 @@ class CommandLine {
   std::string required(const std::string& name) const;
   // Every value given, in order (for repeatable options such as --set).
   std::vector<std::string> values(const std::string& name) const;
+  // The value (or fallback) as a comma-separated list, empty items left out: "a,b" -> {a, b}.
+  std::vector<std::string> listValue(const std::string& name, const std::string& fallback) const;
   // Parsed numbers; UsageError naming the option when the text is not a number of that kind.
   int intValue(const std::string& name, int fallback) const;
   double doubleValue(const std::string& name, double fallback) const;

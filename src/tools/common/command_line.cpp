@@ -2,6 +2,7 @@
 
 #include <cstdlib>
 #include <limits>
+#include <sstream>
 
 namespace occupancy_fusion {
 
@@ -73,6 +74,17 @@ double CommandLine::doubleValue(const std::string& name, double fallback) const 
     throw UsageError("--" + name + " expects a number, got '" + text + "'");
   }
   return parsed;
+}
+
+std::vector<std::string> CommandLine::listValue(const std::string& name,
+                                                const std::string& fallback) const {
+  std::vector<std::string> items;
+  std::stringstream stream(value(name, fallback));
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
 }
 
 }  // namespace occupancy_fusion
