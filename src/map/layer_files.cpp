@@ -189,7 +189,7 @@ LayerFilePaths layerFilePaths(const std::string& prefix) {
 }
 
 LayerFilePaths writeLayerFiles(const LogOddsRaster& raster, const std::string& prefix) {
-  const LayerFilePaths paths = layerFilePaths(prefix);
+  LayerFilePaths paths = layerFilePaths(prefix);
   writeNpy(raster, paths.npy);
   writeFileAtomically(paths.yaml, [&](std::ostream& out) {
     out << "# occupancy_fusion 2D laser layer: log-odds per cell in the .npy, NaN = unknown,\n"
