@@ -11,6 +11,7 @@
 // the camera_info of the same stamp, as CameraSubscriber's exact synchroniser pairs them; if
 // that one was lost, with the latest, since a depth camera's intrinsics do not change while it
 // runs. An image never waits for camera_info (one waiting stage, the tf2 filter, is enough).
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -69,6 +70,9 @@ class DepthMapper : public MapperNodeletBase {
     // Long enough to hold the camera_info of every image the tf2 filter may still hold back.
     camera_infos_.setCacheSize(static_cast<unsigned int>(2 * queue_size + 2));
     camera_infos_.connectInput(camera_info_subscriber_);
+    // After the cache's own callback: once counted, a camera_info is in the cache.
+    camera_info_subscriber_.registerCallback(
+        [this](const CameraInfo::ConstPtr&) { ++camera_infos_received_; });
     tf_filter_ = makeMapFrameFilter<Image>(image_subscriber_, "depth image",
                                            [this](const Image& image) { return onImage(image); });
   }
@@ -124,6 +128,7 @@ class DepthMapper : public MapperNodeletBase {
       status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
     }
     status.add("images integrated", frames.integrated());
+    status.add("camera_info received", camera_infos_received_.load());
     status.add("images dropped (encoding)", frames.dropped(kEncoding));
     status.add("images dropped (camera_info)", frames.dropped(kBadCameraInfo));
     status.add("last image voxels updated", last_stats_.voxels_updated);
@@ -136,6 +141,7 @@ class DepthMapper : public MapperNodeletBase {
   image_transport::SubscriberFilter image_subscriber_;
   message_filters::Subscriber<CameraInfo> camera_info_subscriber_;
   message_filters::Cache<CameraInfo> camera_infos_;
+  std::atomic<std::size_t> camera_infos_received_{0};
   std::unique_ptr<tf2_ros::MessageFilter<Image>> tf_filter_;
 
   DepthIntegrationStats last_stats_;

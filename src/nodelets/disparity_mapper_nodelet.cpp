@@ -58,6 +58,7 @@ class DisparityMapper : public MapperNodeletBase {
         "camera_info", 1, [this](const sensor_msgs::CameraInfo::ConstPtr& info) {
           camera_infos_.push_back(info);
           if (camera_infos_.size() > kCameraInfosKept) camera_infos_.pop_front();
+          ++camera_infos_received_;
         });
     disparity_subscriber_.subscribe(getNodeHandle(), "disparity", queueSize());
     tf_filter_ = makeMapFrameFilter<Disparity>(
@@ -118,6 +119,7 @@ class DisparityMapper : public MapperNodeletBase {
       status.summary(diagnostic_msgs::DiagnosticStatus::OK, "mapping");
     }
     status.add("images integrated", frames.integrated());
+    status.add("camera_info received", camera_infos_received_.load());
     status.add("images dropped (invalid)", frames.dropped(kInvalid));
     status.add("points skipped", skipped_points_.load());
     status.add("points dropped (sigma_z / z over max_depth_sigma_ratio)",
@@ -134,6 +136,7 @@ class DisparityMapper : public MapperNodeletBase {
   ros::Subscriber camera_info_subscriber_;
   static constexpr std::size_t kCameraInfosKept = 8;
   std::deque<sensor_msgs::CameraInfo::ConstPtr> camera_infos_;  // oldest first
+  std::atomic<std::size_t> camera_infos_received_{0};
   message_filters::Subscriber<Disparity> disparity_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<Disparity>> tf_filter_;
 

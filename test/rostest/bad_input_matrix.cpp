@@ -182,6 +182,15 @@ class BadInputMatrix : public ::testing::Test {
     ros::WallDuration(0.05).sleep();
   }
 
+  // Publishes a camera_info and waits until `task`'s mapper has it (its "camera_info received"
+  // count, of every camera_info this test sent it): an image sent next cannot overtake it on its
+  // own connection and be paired with the previous camera_info.
+  static void sendCameraInfo(const ros::Publisher& publisher, const std::string& task,
+                             const sensor_msgs::CameraInfo& info) {
+    publisher.publish(info);
+    expectCount(task, "camera_info received", ++camera_infos_sent_[task]);
+  }
+
   static stereo_msgs::DisparityImage disparity(const ros::Time& stamp, double baseline) {
     stereo_msgs::DisparityImage message;
     message.header.frame_id = "stereo_optical";
@@ -245,6 +254,7 @@ class BadInputMatrix : public ::testing::Test {
   static tf2_ros::TransformBroadcaster* tf_;
   static tf2_ros::StaticTransformBroadcaster* static_tf_;
   static ros::Time start_, last_stamp_;
+  static std::map<std::string, std::size_t> camera_infos_sent_;  // by task
 };
 
 Diagnostics* BadInputMatrix::diagnostics_ = nullptr;
@@ -254,6 +264,7 @@ ros::Publisher BadInputMatrix::depth_, BadInputMatrix::depth_info_, BadInputMatr
 tf2_ros::TransformBroadcaster* BadInputMatrix::tf_ = nullptr;
 tf2_ros::StaticTransformBroadcaster* BadInputMatrix::static_tf_ = nullptr;
 ros::Time BadInputMatrix::start_, BadInputMatrix::last_stamp_;
+std::map<std::string, std::size_t> BadInputMatrix::camera_infos_sent_;
 
 // Frames before any camera_info: dropped, counted, nothing written.
 TEST_F(BadInputMatrix, CameraInfoMissing) {
@@ -265,9 +276,9 @@ TEST_F(BadInputMatrix, CameraInfoMissing) {
   expectCount(kDisparity, dropped("no camera_info"), 1);
   EXPECT_EQ(mapState(), before);
   // Alive: with camera_info, the next frames are integrated and change the map.
-  send(disparity_info_, cameraInfo("stereo_optical", stamp));
+  sendCameraInfo(disparity_info_, kDisparity, cameraInfo("stereo_optical", stamp));
   stamp = nextStamp();
-  send(depth_info_, cameraInfo("depth_optical", stamp));
+  sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp));
   send(depth_, floatImage("depth_optical", stamp, kWall));
   send(disparity_, disparity(stamp, kBaseline));
   expectCount(kDepth, "frames integrated", 1);
@@ -284,11 +295,11 @@ TEST_F(BadInputMatrix, DepthImages) {
   send(depth_, rgb);
   // camera_info of another size, stamped like its image.
   stamp = nextStamp();
-  send(depth_info_, cameraInfo("depth_optical", stamp, 32, 24));
+  sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp, 32, 24));
   send(depth_, floatImage("depth_optical", stamp, kWall));
   // camera_info with zero focal length.
   stamp = nextStamp();
-  send(depth_info_, cameraInfo("depth_optical", stamp, kWidth, kHeight, 0.0));
+  sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp, kWidth, kHeight, 0.0));
   send(depth_, floatImage("depth_optical", stamp, kWall));
   expectCount(kDepth, dropped("encoding"), 1);
   expectCount(kDepth, dropped("camera_info"), 2);
@@ -298,7 +309,7 @@ TEST_F(BadInputMatrix, DepthImages) {
 
   // A good frame, then the same stamp again: the duplicate is dropped.
   stamp = nextStamp(0.5);
-  send(depth_info_, cameraInfo("depth_optical", stamp));
+  sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp));
   send(depth_, floatImage("depth_optical", stamp, kWall));
   expectCount(kDepth, "frames integrated", 2);
   const auto after_good = mapState();
@@ -316,19 +327,19 @@ TEST_F(BadInputMatrix, DisparityImages) {
   mono16.image.encoding = "16UC1";
   send(disparity_, mono16);
   // camera_info of another size (the latest camera_info counts).
-  send(disparity_info_, cameraInfo("stereo_optical", last_stamp_, 32, 24));
+  sendCameraInfo(disparity_info_, kDisparity, cameraInfo("stereo_optical", last_stamp_, 32, 24));
   send(disparity_, disparity(nextStamp(), kBaseline));
   expectCount(kDisparity, dropped("invalid"), 4);
   EXPECT_EQ(mapState(), before);
-  send(disparity_info_, cameraInfo("stereo_optical", last_stamp_));
+  sendCameraInfo(disparity_info_, kDisparity, cameraInfo("stereo_optical", last_stamp_));
   send(disparity_, disparity(nextStamp(1.0), kBaseline));
   expectCount(kDisparity, "frames integrated", 2);
   EXPECT_NE(mapState().first, before.first);
   // Two cameras of different sizes on one camera_info topic: a disparity image takes the
   // camera_info of its own stamp, though another camera's arrived after it.
   const ros::Time own = nextStamp(1.2);
-  send(disparity_info_, cameraInfo("stereo_optical", own));
-  send(disparity_info_, cameraInfo("stereo_optical", nextStamp(1.2), 32, 24));
+  sendCameraInfo(disparity_info_, kDisparity, cameraInfo("stereo_optical", own));
+  sendCameraInfo(disparity_info_, kDisparity, cameraInfo("stereo_optical", nextStamp(1.2), 32, 24));
   send(disparity_, disparity(own, kBaseline));
   expectCount(kDisparity, "frames integrated", 3);
   expectCount(kDisparity, dropped("invalid"), 4);

@@ -63,7 +63,9 @@ class Observer {
 
   struct Counters {
     std::size_t integrated = 0, dropped_encoding = 0, dropped_camera_info = 0;
-    std::size_t known_voxels = 0;  // from the MapServer
+    std::size_t camera_infos = 0;     // camera_info messages the DepthMapper received
+    ros::WallTime depth_status_time;  // when the DepthMapper's status last came
+    std::size_t known_voxels = 0;     // from the MapServer
     bool seen = false;
   };
   Counters counters() const {
@@ -142,6 +144,8 @@ class Observer {
         counters_.integrated = diagnosticCount(status, "images integrated");
         counters_.dropped_encoding = diagnosticCount(status, "images dropped (encoding)");
         counters_.dropped_camera_info = diagnosticCount(status, "images dropped (camera_info)");
+        counters_.camera_infos = diagnosticCount(status, "camera_info received");
+        counters_.depth_status_time = ros::WallTime::now();
         counters_.seen = true;
       }
       if (isTask(status, "map publishing")) {
@@ -324,12 +328,19 @@ sensor_msgs::ImagePtr flatDepthImage(const sensor_msgs::CameraInfo& info, float 
   return image;
 }
 
-// Publishes the camera_info, then the image with the same stamp.
+// Publishes the camera_info, waits until the DepthMapper has it (its "camera_info received"
+// count, read fresh before: the simulator is paused, so the test is the only sender), then the
+// image with the same stamp: the image cannot overtake its camera_info on its own connection and
+// be paired with the previous one.
 void sendFrame(ros::Publisher& info_pub, ros::Publisher& image_pub, sensor_msgs::CameraInfo info,
                const sensor_msgs::ImagePtr& image) {
+  const ros::WallTime asked = ros::WallTime::now();
+  ASSERT_TRUE(waitUntil([&] { return g_observer->counters().depth_status_time > asked; }, 5.0));
+  const std::size_t received = g_observer->counters().camera_infos;
   info.header.stamp = image->header.stamp;
   info_pub.publish(info);
-  ros::WallDuration(0.1).sleep();
+  ASSERT_TRUE(waitUntil([&] { return g_observer->counters().camera_infos >= received + 1; }, 5.0))
+      << "the DepthMapper did not report the camera_info";
   image_pub.publish(image);
 }
 
