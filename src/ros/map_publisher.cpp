@@ -152,6 +152,13 @@ MapPublisher::MapPublisher(const ros::NodeHandle& node_handle,
                                   &MapPublisher::onTimer, this);
 }
 
+MapPublisher::~MapPublisher() {
+  // Members go in reverse order, so diagnostics_ would be destroyed while timer_ still fires
+  // onTimer, which uses it (ThreadSanitizer saw the Updater's mutex destroyed right after a
+  // cycle on another thread when a MapServer was unloaded). stop() also waits for a running cycle.
+  timer_.stop();
+}
+
 void MapPublisher::onTimer(const ros::WallTimerEvent& /*event*/) {
   publishCycle();
   // Paced by wall time: Updater::update() waits until ROS time passes its next due time, which a

@@ -93,6 +93,10 @@ class MapPublisher {
   MapPublisher(const ros::NodeHandle& node_handle, const ros::NodeHandle& private_node_handle,
                const std::string& name, std::shared_ptr<SharedMap> map,
                const MapPublisherConfig& config);
+  // Stops the timer first, waiting for a running publishing cycle.
+  ~MapPublisher();
+  MapPublisher(const MapPublisher&) = delete;
+  MapPublisher& operator=(const MapPublisher&) = delete;
 
   const PublishTimings& lastTimings() const { return timings_; }
   const MapLockStatistics& lockStatistics() const { return lock_statistics_; }
