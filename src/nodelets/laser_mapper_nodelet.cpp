@@ -251,11 +251,13 @@ class LaserMapper : public MapperNodeletBase {
 
   std::mutex local_mutex_;
   ros::Publisher local_grid_publisher_;
-  ros::Timer local_grid_timer_;
 
   std::atomic<double> last_scan_ms_{0.0};
   std::atomic<std::size_t> local_grid_cycles_{0};
   std::atomic<double> last_local_grid_ms_{0.0};
+  // Last, so that it is destroyed (stopped, waiting for a running cycle) before what its cycle
+  // uses.
+  ros::Timer local_grid_timer_;
 };
 
 }  // namespace occupancy_fusion
