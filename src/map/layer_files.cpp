@@ -1,6 +1,7 @@
 #include "occupancy_fusion/map/layer_files.h"
 
 #include <yaml-cpp/yaml.h>
+#include <boost/crc.hpp>
 
 #include <array>
 #include <cerrno>
@@ -12,6 +13,7 @@
 #include <iomanip>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -24,6 +26,7 @@ namespace {
 // What the yaml says of the array.
 struct LayerHeader {
   std::string npy_name;
+  std::optional<std::uint32_t> npy_crc32;  // of the whole .npy file, when the yaml gives it
   double resolution = 0.0;
   CellIndex origin_cell = CellIndex::Zero();
   int width = 0;
@@ -82,6 +85,20 @@ LayerHeader parseLayerYaml(const std::string& yaml_text) {
   if (!yaml.IsMap()) fail("laser layer yaml: not a YAML mapping");
   LayerHeader header;
   header.npy_name = requiredScalar<std::string>(yaml, "log_odds");
+  if (yaml["log_odds_crc32"]) {
+    const std::string text = requiredScalar<std::string>(yaml, "log_odds_crc32");
+    std::size_t used = 0;
+    unsigned long value = 0;
+    try {
+      value = std::stoul(text, &used, 16);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size() || value > 0xffffffffUL) {
+      fail("laser layer yaml: 'log_odds_crc32' is not a 32-bit hexadecimal number: " + text);
+    }
+    header.npy_crc32 = static_cast<std::uint32_t>(value);
+  }
   header.resolution = requiredScalar<double>(yaml, "resolution");
   if (!(header.resolution > 0.0) || !std::isfinite(header.resolution)) {
     fail("laser layer yaml: resolution must be a positive number of metres");
@@ -144,7 +161,24 @@ NpyMatrix parseNpyHeader(const std::string& bytes) {
   return matrix;
 }
 
+// CRC-32 (IEEE 802.3, as zlib's and PNG's): Python's zlib.crc32 gives the same value.
+std::uint32_t crc32Of(const std::string& bytes) {
+  boost::crc_32_type crc;
+  crc.process_bytes(bytes.data(), bytes.size());
+  return crc.checksum();
+}
+
+std::string hexText(std::uint32_t value) {
+  std::ostringstream text;
+  text << "0x" << std::hex << std::setw(8) << std::setfill('0') << value;
+  return text.str();
+}
+
 LogOddsRaster parseLayerArray(const LayerHeader& header, const std::string& npy_bytes) {
+  if (header.npy_crc32 && crc32Of(npy_bytes) != *header.npy_crc32) {
+    fail("laser layer: the array's CRC-32 is " + hexText(crc32Of(npy_bytes)) + ", the yaml's " +
+         hexText(*header.npy_crc32) + ": the files come from different saves");
+  }
   const NpyMatrix matrix = parseNpyHeader(npy_bytes);
   if (matrix.rows != header.height || matrix.columns != header.width) {
     fail("laser layer: the array's shape (" + std::to_string(matrix.rows) + ", " +
@@ -190,11 +224,15 @@ LayerFilePaths layerFilePaths(const std::string& prefix) {
 
 LayerFilePaths writeLayerFiles(const LogOddsRaster& raster, const std::string& prefix) {
   LayerFilePaths paths = layerFilePaths(prefix);
-  writeNpy(raster, paths.npy);
+  const std::string npy_bytes = encodeNpy(raster);
+  writeFileAtomically(paths.npy, [&](std::ostream& out) {
+    out.write(npy_bytes.data(), static_cast<std::streamsize>(npy_bytes.size()));
+  });
   writeFileAtomically(paths.yaml, [&](std::ostream& out) {
     out << "# occupancy_fusion 2D laser layer: log-odds per cell in the .npy, NaN = unknown,\n"
         << "# array[y, x] is cell origin_cell + (x, y); row 0 is the lowest y.\n"
         << "log_odds: " << std::filesystem::path(paths.npy).filename().string() << "\n"
+        << "log_odds_crc32: " << hexText(crc32Of(npy_bytes)) << "  # of the whole .npy file\n"
         << "resolution: " << numberText(raster.resolution) << "\n"
         << "origin_cell: [" << raster.origin_cell.x() << ", " << raster.origin_cell.y() << "]\n"
         << std::setprecision(15)  // origin is for readers: -23.4, not -23.400000000000002

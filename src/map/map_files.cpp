@@ -183,10 +183,10 @@ void writeMapServerFiles(const OccupancyRaster& raster, const std::string& prefi
   });
 }
 
-void writeNpy(const LogOddsRaster& raster, const std::string& path) {
+std::string encodeNpy(const LogOddsRaster& raster) {
   if (raster.width < 0 || raster.height < 0 ||
       raster.data.size() != static_cast<std::size_t>(raster.width) * raster.height) {
-    throw std::invalid_argument("writeNpy: data size does not match width x height for " + path);
+    throw std::invalid_argument("encodeNpy: data size does not match width x height");
   }
   // Format 1.0: magic, version, uint16 header length, then a Python dict literal padded with
   // spaces and ended by '\n' so that the data starts at a multiple of 64 bytes.
@@ -196,13 +196,25 @@ void writeNpy(const LogOddsRaster& raster, const std::string& path) {
   const std::size_t unpadded = kPreamble + header.size() + 1;
   header.append((64 - unpadded % 64) % 64, ' ');
   header.push_back('\n');
+  std::ostringstream out;
+  out.write("\x93NUMPY\x01\x00", 8);
+  const char length[2] = {static_cast<char>(header.size() & 0xff),
+                          static_cast<char>((header.size() >> 8) & 0xff)};
+  out.write(length, 2);
+  out << header;
+  for (const float value : raster.data) writeLittleEndianFloat(out, value);
+  return out.str();
+}
+
+void writeNpy(const LogOddsRaster& raster, const std::string& path) {
+  std::string bytes;
+  try {
+    bytes = encodeNpy(raster);
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument(std::string(error.what()) + " for " + path);
+  }
   writeFileAtomically(path, [&](std::ostream& out) {
-    out.write("\x93NUMPY\x01\x00", 8);
-    const char length[2] = {static_cast<char>(header.size() & 0xff),
-                            static_cast<char>((header.size() >> 8) & 0xff)};
-    out.write(length, 2);
-    out << header;
-    for (const float value : raster.data) writeLittleEndianFloat(out, value);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   });
 }
 

@@ -2,11 +2,13 @@
 // voxels (the .ot holds voxels only):
 //   <prefix>.laser.npy   NumPy format 1.0, '<f4', C order, shape (height, width): the log-odds of
 //                        the layer's known window, NaN = unknown, row 0 the lowest y (as writeNpy)
-//   <prefix>.laser.yaml  what places the array: the .npy's file name (relative to the yaml),
-//                        resolution, origin_cell (cell index of array[0, 0]), origin (its
-//                        lower-left corner in metres, origin_cell * resolution) and width / height
-// Each file is written atomically, the .npy first; the yaml's width and height must match the
-// array's shape on reading, which catches a yaml and an array from different saves.
+//   <prefix>.laser.yaml  what places the array: the .npy's file name (relative to the yaml) and
+//                        its CRC-32 (log_odds_crc32, as zlib.crc32 computes it), resolution,
+//                        origin_cell (cell index of array[0, 0]), origin (its lower-left corner in
+//                        metres, origin_cell * resolution) and width / height
+// Each file is written atomically, the .npy first. On reading, the array must have the yaml's
+// CRC-32 (when the yaml gives one) and shape: a yaml and an array of different saves (a crash
+// between the two writes, a file copied alone) are refused.
 #pragma once
 
 #include <string>
@@ -26,7 +28,8 @@ LayerFilePaths layerFilePaths(const std::string& prefix);
 LayerFilePaths writeLayerFiles(const LogOddsRaster& layer_window, const std::string& prefix);
 
 // Parses the yaml's text and the .npy's bytes into a raster. Throws std::runtime_error saying what
-// is wrong: a missing or malformed key, a .npy that is not a 2D '<f4' C-order array, a shape other
+// is wrong: a missing or malformed key, a CRC-32 other than the array's, a .npy that is not a 2D
+// '<f4' C-order array, a shape other
 // than the yaml's, a size other than the shape's, an infinite value, a window outside the layer's
 // coordinate range.
 LogOddsRaster parseLayerFiles(const std::string& yaml_text, const std::string& npy_bytes);

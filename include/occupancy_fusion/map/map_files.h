@@ -38,6 +38,8 @@ void writeMapServerFiles(const OccupancyRaster& raster, const std::string& prefi
 // NumPy .npy, format version 1.0: dtype '<f4', C order, shape (height, width), NaN = unknown.
 // Row 0 is the lowest y (the raster's origin row), so array[y, x] is raster.at(x, y).
 void writeNpy(const LogOddsRaster& raster, const std::string& path);
+// The bytes writeNpy writes. Throws std::invalid_argument for a data size not width x height.
+std::string encodeNpy(const LogOddsRaster& raster);
 
 // PCD v0.7 with fields x y z probability (float32): the centre and occupancy probability of every
 // known voxel. WIDTH = number of points, HEIGHT = 1.

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -25,6 +26,7 @@
 
 #include "../test_folder.h"
 #include "occupancy_fusion/map/layer_files.h"
+#include "occupancy_fusion/map/map_files.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -42,6 +44,17 @@ GridLayer2DConfig layerConfig() {
 }
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+// CRC-32 as zlib.crc32 (reflected polynomial 0xEDB88320), bit by bit: independent of the
+// library the writer uses.
+std::uint32_t bitwiseCrc32(const std::string& bytes) {
+  std::uint32_t crc = 0xffffffffu;
+  for (const char byte : bytes) {
+    crc ^= static_cast<unsigned char>(byte);
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
 
 std::string readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -136,6 +149,10 @@ TEST_F(LayerFiles, ArrayIsTheDocumentedNumpyLayout) {
 
   const std::string yaml = readBytes(paths.yaml);
   EXPECT_NE(yaml.find("log_odds: site.laser.npy\n"), std::string::npos) << yaml;
+  EXPECT_EQ(bitwiseCrc32("123456789"), 0xcbf43926u);  // the CRC-32 check value
+  char crc_text[32];
+  std::snprintf(crc_text, sizeof(crc_text), "log_odds_crc32: 0x%08x", bitwiseCrc32(npy));
+  EXPECT_NE(yaml.find(crc_text), std::string::npos) << crc_text << "\n" << yaml;
   EXPECT_NE(yaml.find("resolution: 0.05\n"), std::string::npos) << yaml;
   EXPECT_NE(yaml.find("origin_cell: [" + std::to_string(min_x) + ", " + std::to_string(min_y)),
             std::string::npos)
@@ -213,16 +230,30 @@ TEST_F(LayerFiles, DamagedFilesAreRefusedSayingWhatIsWrong) {
   const std::size_t data = npy.size() - 4 * layer.toLogOddsRaster().data.size();
   std::string infinite = npy;
   std::memcpy(&infinite[data + 4], &kInf, sizeof(kInf));
+  // The array of another save with the same window: only the CRC-32 can tell.
+  GridLayer2D other(layerConfig());
+  fillRandom(&other, 3, 50);
+  other.updateCell(layer.knownBounds()->min, 0.25f);
+  const std::string other_npy = encodeNpy(other.toLogOddsRaster());
+  ASSERT_EQ(other_npy.size(), npy.size());
+  ASSERT_NE(other_npy, npy);
+  // Without the optional CRC line, damage inside the array reaches the .npy checks.
+  const std::string unchecked = withLine("log_odds_crc32", "# no CRC");
+  ASSERT_NO_THROW(parseLayerFiles(unchecked, npy));
 
   const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
-      {"truncated array", yaml, npy.substr(0, npy.size() - 6), "data bytes"},
-      {"truncated header", yaml, npy.substr(0, 40), "truncated header"},
-      {"not npy", yaml, "P5 3 3 255", "not .npy"},
-      {"float64", yaml, replaced(npy, "<f4", "<f8"), "float32"},
-      {"Fortran order", yaml, replaced(npy, "False", "True "), "C order"},
-      {"3D array", yaml, replaced(npy, "'shape': (", "'shape': (1, "), "2D"},
+      {"array of another save, same shape", yaml, other_npy, "different saves"},
+      {"truncated array", yaml, npy.substr(0, npy.size() - 6), "CRC-32"},
+      {"CRC not a number", withLine("log_odds_crc32", "log_odds_crc32: 0xfoo"), npy,
+       "'log_odds_crc32'"},
+      {"truncated array, no CRC", unchecked, npy.substr(0, npy.size() - 6), "data bytes"},
+      {"truncated header", unchecked, npy.substr(0, 40), "truncated header"},
+      {"not npy", unchecked, "P5 3 3 255", "not .npy"},
+      {"float64", unchecked, replaced(npy, "<f4", "<f8"), "float32"},
+      {"Fortran order", unchecked, replaced(npy, "False", "True "), "C order"},
+      {"3D array", unchecked, replaced(npy, "'shape': (", "'shape': (1, "), "2D"},
       {"shape of another save", withLine("width", "width: 3"), npy, "different saves"},
-      {"infinite cell", yaml, infinite, "infinite"},
+      {"infinite cell", unchecked, infinite, "infinite"},
       {"no origin_cell", withLine("origin_cell", "cell: [0, 0]"), npy, "'origin_cell'"},
       {"origin edited", withLine("origin", "origin: [1000, 0]"), npy, "origin does not equal"},
       {"zero resolution", replaced(yaml, "resolution: 0.05", "resolution: 0"), npy, "resolution"},
