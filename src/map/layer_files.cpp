@@ -75,6 +75,46 @@ std::array<T, 2> requiredPair(const YAML::Node& yaml, const char* key) {
   }
 }
 
+// log_odds_crc32, optional: a hexadecimal 32-bit number.
+std::optional<std::uint32_t> optionalCrc32(const YAML::Node& yaml) {
+  if (!yaml["log_odds_crc32"]) return std::nullopt;
+  const std::string text = requiredScalar<std::string>(yaml, "log_odds_crc32");
+  std::size_t used = 0;
+  unsigned long value = 0;
+  try {
+    value = std::stoul(text, &used, 16);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || value > 0xffffffffUL) {
+    fail("laser layer yaml: 'log_odds_crc32' is not a 32-bit hexadecimal number: " + text);
+  }
+  return static_cast<std::uint32_t>(value);
+}
+
+void requireWindowInRange(const LayerHeader& header) {
+  if (header.width < 0 || header.height < 0) fail("laser layer yaml: negative width or height");
+  constexpr long long kLimit = GridLayer2D::kMaxCoordinateCells;
+  for (int axis = 0; axis < 2; ++axis) {
+    const long long first = header.origin_cell[axis];
+    const long long end = first + (axis == 0 ? header.width : header.height);
+    if (first < -kLimit || end > kLimit) {
+      fail("laser layer yaml: the window lies outside the layer's coordinate range");
+    }
+  }
+}
+
+// origin is for readers of the files; it must agree with origin_cell, or one was edited.
+void requireOriginMatchesCell(const YAML::Node& yaml, const LayerHeader& header) {
+  const std::array<double, 2> origin = requiredPair<double>(yaml, "origin");
+  for (int axis = 0; axis < 2; ++axis) {
+    if (!(std::abs(origin[axis] - header.origin_cell[axis] * header.resolution) <=
+          1e-3 * header.resolution)) {
+      fail("laser layer yaml: origin does not equal origin_cell x resolution");
+    }
+  }
+}
+
 LayerHeader parseLayerYaml(const std::string& yaml_text) {
   YAML::Node yaml;
   try {
@@ -85,20 +125,7 @@ LayerHeader parseLayerYaml(const std::string& yaml_text) {
   if (!yaml.IsMap()) fail("laser layer yaml: not a YAML mapping");
   LayerHeader header;
   header.npy_name = requiredScalar<std::string>(yaml, "log_odds");
-  if (yaml["log_odds_crc32"]) {
-    const std::string text = requiredScalar<std::string>(yaml, "log_odds_crc32");
-    std::size_t used = 0;
-    unsigned long value = 0;
-    try {
-      value = std::stoul(text, &used, 16);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != text.size() || value > 0xffffffffUL) {
-      fail("laser layer yaml: 'log_odds_crc32' is not a 32-bit hexadecimal number: " + text);
-    }
-    header.npy_crc32 = static_cast<std::uint32_t>(value);
-  }
+  header.npy_crc32 = optionalCrc32(yaml);
   header.resolution = requiredScalar<double>(yaml, "resolution");
   if (!(header.resolution > 0.0) || !std::isfinite(header.resolution)) {
     fail("laser layer yaml: resolution must be a positive number of metres");
@@ -107,23 +134,8 @@ LayerHeader parseLayerYaml(const std::string& yaml_text) {
   header.origin_cell = CellIndex(cell[0], cell[1]);
   header.width = requiredScalar<int>(yaml, "width");
   header.height = requiredScalar<int>(yaml, "height");
-  if (header.width < 0 || header.height < 0) fail("laser layer yaml: negative width or height");
-  constexpr long long kLimit = GridLayer2D::kMaxCoordinateCells;
-  for (int axis = 0; axis < 2; ++axis) {
-    const long long first = header.origin_cell[axis];
-    const long long end = first + (axis == 0 ? header.width : header.height);
-    if (first < -kLimit || end > kLimit) {
-      fail("laser layer yaml: the window lies outside the layer's coordinate range");
-    }
-  }
-  // origin is for readers of the files; it must agree with origin_cell, or one was edited.
-  const std::array<double, 2> origin = requiredPair<double>(yaml, "origin");
-  for (int axis = 0; axis < 2; ++axis) {
-    if (!(std::abs(origin[axis] - header.origin_cell[axis] * header.resolution) <=
-          1e-3 * header.resolution)) {
-      fail("laser layer yaml: origin does not equal origin_cell x resolution");
-    }
-  }
+  requireWindowInRange(header);
+  requireOriginMatchesCell(yaml, header);
   return header;
 }
 
