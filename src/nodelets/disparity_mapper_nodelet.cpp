@@ -54,8 +54,10 @@ class DisparityMapper : public MapperNodeletBase {
   // All callbacks run on this nodelet's single-threaded queue (getNodeHandle()), so the cached
   // camera_info needs no lock.
   void subscribe() {
+    // As deep as the cache: with a queue of 1, camera_infos arriving while an image is integrated
+    // were dropped, and images still waiting for tf lost the camera_info of their own stamp.
     camera_info_subscriber_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
-        "camera_info", 1, [this](const sensor_msgs::CameraInfo::ConstPtr& info) {
+        "camera_info", kCameraInfosKept, [this](const sensor_msgs::CameraInfo::ConstPtr& info) {
           camera_infos_.push_back(info);
           if (camera_infos_.size() > kCameraInfosKept) camera_infos_.pop_front();
           ++camera_infos_received_;
