@@ -111,14 +111,7 @@ stereo_msgs::DisparityImage disparityImageMessage(const std::vector<float>& disp
 }
 
 sensor_msgs::CameraInfo leftCameraInfoMessage(const StereoCamera& camera, int width, int height) {
-  CameraIntrinsics left;
-  left.width = width;
-  left.height = height;
-  left.fx = camera.fx;
-  left.fy = camera.fy;
-  left.cx = camera.cx;
-  left.cy = camera.cy;
-  return cameraInfoMessage(left, "", ros::Time());
+  return cameraInfoMessage(camera.leftIntrinsics(width, height), "", ros::Time());
 }
 
 }  // namespace occupancy_fusion

@@ -157,14 +157,7 @@ stereo_msgs::DisparityImage matchedDisparity(const std::string& folder, const st
       (fs::path(folder) / "im0.png").string(), (fs::path(folder) / "im1.png").string(), settings,
       static_cast<float>(calibration.doffs), &width, &height);
   const StereoCamera camera = calibration.camera();
-  CameraIntrinsics intrinsics;
-  intrinsics.width = width;
-  intrinsics.height = height;
-  intrinsics.fx = camera.fx;
-  intrinsics.fy = camera.fy;
-  intrinsics.cx = camera.cx;
-  intrinsics.cy = camera.cy;
-  *info = cameraInfoMessage(intrinsics, frame, ros::Time());
+  *info = cameraInfoMessage(camera.leftIntrinsics(width, height), frame, ros::Time());
   // Matched values lie in [doffs, doffs + num_disparities): that is the published range.
   return disparityMessage(disparity, width, height, camera, calibration.doffs,
                           calibration.doffs + settings.num_disparities, frame, ros::Time());

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/sensors/camera_intrinsics.h"
+
 namespace occupancy_fusion {
 
 // A rectified stereo pair as the disparity image needs it, in the ROS
@@ -23,6 +25,17 @@ struct StereoCamera {
   double baseline = 0.1;  // m, distance between the optical centres (DisparityImage.T)
 
   void validate() const;  // throws std::invalid_argument naming the bad field
+  // The left camera's intrinsics for images of width x height (what its camera_info holds).
+  CameraIntrinsics leftIntrinsics(int width, int height) const {
+    CameraIntrinsics left;
+    left.width = width;
+    left.height = height;
+    left.fx = fx;
+    left.fy = fy;
+    left.cx = cx;
+    left.cy = cy;
+    return left;
+  }
 };
 
 // A non-owning, row-major view of disparity in pixels of the left image (d = fx

@@ -51,22 +51,27 @@ void fill(SharedMap* map, unsigned seed) {
   }
 }
 
-std::size_t voxelMismatches(const VoxelMap& expected, const VoxelMap& actual) {
-  std::size_t mismatches = 0;
-  expected.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+// Entries of `expected` missing from `actual` or with other bits, plus one if the counts differ.
+// for_each_known: VoxelMap::forEachKnownVoxel or GridLayer2D::forEachKnownCell.
+template <typename Store, typename ForEachKnown>
+std::size_t mismatches(const Store& expected, const Store& actual, ForEachKnown for_each_known,
+                       std::size_t expected_count, std::size_t actual_count) {
+  std::size_t differing = 0;
+  (expected.*for_each_known)([&](const auto& index, float log_odds) {
     const std::optional<float> back = actual.logOdds(index);
-    if (!back || !sameBits(*back, log_odds)) ++mismatches;
+    if (!back || !sameBits(*back, log_odds)) ++differing;
   });
-  return mismatches + (expected.knownVoxelCount() != actual.knownVoxelCount() ? 1 : 0);
+  return differing + (expected_count != actual_count ? 1 : 0);
+}
+
+std::size_t voxelMismatches(const VoxelMap& expected, const VoxelMap& actual) {
+  return mismatches(expected, actual, &VoxelMap::forEachKnownVoxel, expected.knownVoxelCount(),
+                    actual.knownVoxelCount());
 }
 
 std::size_t cellMismatches(const GridLayer2D& expected, const GridLayer2D& actual) {
-  std::size_t mismatches = 0;
-  expected.forEachKnownCell([&](const CellIndex& index, float log_odds) {
-    const std::optional<float> back = actual.logOdds(index);
-    if (!back || !sameBits(*back, log_odds)) ++mismatches;
-  });
-  return mismatches + (expected.knownCellCount() != actual.knownCellCount() ? 1 : 0);
+  return mismatches(expected, actual, &GridLayer2D::forEachKnownCell, expected.knownCellCount(),
+                    actual.knownCellCount());
 }
 
 class SavedMap : public TestFolder {
