@@ -41,7 +41,7 @@ void readEnum(const ParameterSource& source, const std::string& name, Parse pars
 
 VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source) {
   // The named set first; every key below overrides its value.
-  StereoParameterSet set = StereoParameterSet::kTableI;
+  StereoParameterSet set = StereoParameterSet::kMeasured;
   readEnum(source, "parameter_set", stereoParameterSetFromString, &set);
   VisibilityStereoConfig config = visibilityStereoConfigFor(set);
   readEnum(source, "method", stereoIntegrationMethodFromString, &config.method);
@@ -54,6 +54,8 @@ VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source)
   read(source, "visibility_max", &config.visibility_max);
   read(source, "unknown_occupancy", &config.unknown_occupancy);
   read(source, "unknown_neighbour_occupancy", &config.unknown_neighbour_occupancy);
+  readEnum(source, "unknown_neighbours", unknownNeighboursFromString, &config.unknown_neighbours);
+  read(source, "measured_window_px", &config.measured_surface.window_px);
   read(source, "inside_stop_probability", &config.inside_stop_probability);
   read(source, "max_range", &config.max_range);
   read(source, "bundle_rays", &config.bundle_rays);

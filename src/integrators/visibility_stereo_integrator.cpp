@@ -29,24 +29,43 @@ StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& nam
 }
 
 std::string toString(UnknownNeighbours policy) {
-  return policy == UnknownNeighbours::kPrior ? "prior" : "known_only";
+  switch (policy) {
+    case UnknownNeighbours::kPrior:
+      return "prior";
+    case UnknownNeighbours::kMeasured:
+      return "measured";
+    case UnknownNeighbours::kKnownOnly:
+      break;
+  }
+  return "known_only";
 }
 
 UnknownNeighbours unknownNeighboursFromString(const std::string& name) {
   if (name == "known_only") return UnknownNeighbours::kKnownOnly;
   if (name == "prior") return UnknownNeighbours::kPrior;
-  throw std::invalid_argument("unknown_neighbours must be known_only or prior, not '" + name + "'");
+  if (name == "measured") return UnknownNeighbours::kMeasured;
+  throw std::invalid_argument("unknown_neighbours must be known_only, prior or measured, not '" +
+                              name + "'");
 }
 
 std::string toString(StereoParameterSet set) {
-  return set == StereoParameterSet::kFastExpansion ? "fast_expansion" : "table_i";
+  switch (set) {
+    case StereoParameterSet::kFastExpansion:
+      return "fast_expansion";
+    case StereoParameterSet::kMeasured:
+      return "measured";
+    case StereoParameterSet::kTableI:
+      break;
+  }
+  return "table_i";
 }
 
 StereoParameterSet stereoParameterSetFromString(const std::string& name) {
   if (name == "table_i") return StereoParameterSet::kTableI;
   if (name == "fast_expansion") return StereoParameterSet::kFastExpansion;
-  throw std::invalid_argument("parameter set must be table_i or fast_expansion, not '" + name +
-                              "'");
+  if (name == "measured") return StereoParameterSet::kMeasured;
+  throw std::invalid_argument("parameter set must be table_i, fast_expansion or measured, not '" +
+                              name + "'");
 }
 
 VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set) {
@@ -56,6 +75,8 @@ VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set) {
     config.visibility_min = 0.003;
     config.prob_hit_invisible = 0.2;
   }
+  if (set == StereoParameterSet::kMeasured)
+    config.unknown_neighbours = UnknownNeighbours::kMeasured;
   return config;
 }
 
@@ -102,7 +123,8 @@ void VisibilityStereoConfig::validate() const {
   }
   requireOpenUnit(unknown_occupancy, "unknown_occupancy");
   if (unknown_neighbours != UnknownNeighbours::kKnownOnly &&
-      unknown_neighbours != UnknownNeighbours::kPrior) {
+      unknown_neighbours != UnknownNeighbours::kPrior &&
+      unknown_neighbours != UnknownNeighbours::kMeasured) {
     throw std::invalid_argument("VisibilityStereoConfig.unknown_neighbours is not a known policy");
   }
   if (!(unknown_neighbour_occupancy >= 0 && unknown_neighbour_occupancy <= 1)) {
@@ -115,6 +137,13 @@ void VisibilityStereoConfig::validate() const {
   }
   if (std::isnan(max_range)) {
     throw std::invalid_argument("VisibilityStereoConfig.max_range must not be NaN");
+  }
+  measured_surface.validate();
+  if (!(measured_sigma_min_voxels > 0 && measured_sigma_max_voxels >= measured_sigma_min_voxels &&
+        std::isfinite(measured_sigma_max_voxels))) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.measured_sigma_min_voxels must be positive and at most "
+        "measured_sigma_max_voxels (finite)");
   }
   disparity.validate();
 }
@@ -187,6 +216,7 @@ class FrameUpdates {
     slots_.reserve(voxels);
     entries_.reserve(voxels);
     occlusions_.reserve(voxels);
+    measured_visibilities_.reserve(voxels);
   }
   std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
     const auto [it, inserted] =
@@ -194,6 +224,7 @@ class FrameUpdates {
     if (inserted) {
       entries_.push_back({index, 0.0f, 0.0f});
       occlusions_.push_back(kNotComputed);
+      measured_visibilities_.push_back(kNotComputed);
     }
     return it->second;
   }
@@ -203,6 +234,13 @@ class FrameUpdates {
   template <typename Compute>
   float occlusion(std::uint32_t entry, Compute&& compute) {
     float& value = occlusions_[entry];
+    if (std::isnan(value)) value = static_cast<float>(compute());
+    return value;
+  }
+  // measured_visibility: the voxel's visibility by the frame's measurement, on first request.
+  template <typename Compute>
+  float measuredVisibility(std::uint32_t entry, Compute&& compute) {
+    float& value = measured_visibilities_[entry];
     if (std::isnan(value)) value = static_cast<float>(compute());
     return value;
   }
@@ -224,7 +262,8 @@ class FrameUpdates {
   static constexpr float kNotComputed = std::numeric_limits<float>::quiet_NaN();
   SpatialKeyMap<std::uint32_t> slots_;
   std::vector<StereoVoxelUpdate> entries_;
-  std::vector<float> occlusions_;  // per entry; kNotComputed until requested
+  std::vector<float> occlusions_;             // per entry; kNotComputed until requested
+  std::vector<float> measured_visibilities_;  // per entry; kNotComputed until requested
 };
 
 // Read access to the map for one thread and frame: blocks are copied once
@@ -271,6 +310,53 @@ class MapSnapshot {
 struct NeighbourReading {
   bool ignore_unknown;     // kKnownOnly: left out of the minimum
   float unknown_log_odds;  // kPrior: logit(unknown_neighbour_occupancy)
+  // kMeasured: the frame's measured surface (null: read as kPrior), Eq. 7's lambda and Phi.
+  const MeasuredSurface* surface;
+  double lambda;
+  const NormalCdfTable* phi;
+  double resolution;
+
+  double sigma_min, sigma_max;  // m, bounds of the measurement's sigma_z
+  bool fuse_known;  // the measurement's evidence added to known neighbours' log-odds too
+  float min_log_odds, max_log_odds;  // the map's clamping bounds
+
+  // The frame's measurement at a voxel: logit P(the measured surface on its line of sight lies
+  // in front of its centre), with Eq. 7's sigma_z, clamped to the map's bounds; false where the
+  // image does not say.
+  bool measuredLogOdds(const VoxelIndex& voxel, float* log_odds) const {
+    double p = 0;
+    if (!measuredProbability(voxel, 0.0, &p)) return false;
+    // Not clamped below: space the frame measures free, P(O) = 0, passes the visibility on
+    // unchanged, as Eq. 3 does for q_max and above.
+    *log_odds = std::min(logit(p), max_log_odds);
+    return true;
+  }
+  // P(the measured surface lies in front of depth z + depth_offset), z the voxel centre's depth.
+  bool measuredProbability(const VoxelIndex& voxel, double depth_offset, double* p) const {
+    if (surface == nullptr) return false;
+    const Eigen::Vector3d center = (voxel.cast<double>().array() + 0.5) * resolution;
+    double z = 0, z_surface = 0;
+    if (!surface->depthAt(center, &z, &z_surface)) return false;
+    const double sigma_z = lambda * z_surface * z_surface;
+    const double sigma = std::clamp(sigma_z, sigma_min, sigma_max);
+    *p = (*phi)((z + depth_offset - z_surface) / sigma);
+    return true;
+  }
+  double face_offset;  // m, from a voxel's centre to its front and back along the depth
+  // A neighbour's log-odds for Eq. 1: the map's (NaN: never observed) with the measurement's.
+  float read(const VoxelIndex& neighbour, float map_log_odds) const {
+    float measured = 0;
+    if (std::isnan(map_log_odds)) {
+      return measuredLogOdds(neighbour, &measured) ? measured : unknown_log_odds;
+    }
+    if (fuse_known && measuredLogOdds(neighbour, &measured)) {
+      // The measurement's free-space evidence weighs at most as one clamped free voxel, so that a
+      // surface the map knows well still occludes where the frame's median misses it (an object
+      // smaller than the window, seen through a patch shifted away from the camera).
+      return std::min(map_log_odds + std::max(measured, min_log_odds), max_log_odds);
+    }
+    return map_log_odds;
+  }
 };
 
 // Eq. 1: P(C_v) = min P(O) over the (up to three) neighbours behind the faces
@@ -288,10 +374,8 @@ double localOcclusion(const VoxelIndex& voxel, const VoxelIndex& origin,
     VoxelIndex neighbour = voxel;
     neighbour[axis] += voxel[axis] > origin[axis] ? -1 : 1;
     float value = snapshot->logOdds(neighbour);
-    if (std::isnan(value)) {
-      if (reading.ignore_unknown) continue;
-      value = reading.unknown_log_odds;
-    }
+    if (std::isnan(value) && reading.ignore_unknown) continue;
+    value = reading.read(neighbour, value);
     min_log_odds = std::min(min_log_odds, value);
     any = true;
   }
@@ -306,6 +390,7 @@ struct CachedVoxel {
   VoxelIndex index;
   std::uint32_t entry;
   float occlusion;
+  float measured_visibility;  // 1 without a measurement
 };
 
 struct RayCounters {
@@ -321,6 +406,7 @@ struct FrameContext {
   VoxelIndex origin_voxel;
   double resolution;
   NeighbourReading neighbours;
+  bool measured_visibility;  // a voxel's visibility is at most the measurement's
 };
 
 class RayCaster {
@@ -362,9 +448,31 @@ class RayCaster {
                                                             frame_.neighbours, snapshot_);
                                     })
               : 0.0f;
-      current_.push_back({index, entry, occlusion});
+      const float measured_visibility =
+          need_occlusion && frame_.measured_visibility
+              ? updates_->measuredVisibility(
+                    entry,
+                    [&] {
+                      // Visible while the surface lies behind its
+                      // front.
+                      double p = 0;
+                      const auto& n = frame_.neighbours;
+                      if (!n.measuredProbability(index, -n.face_offset, &p)) {
+                        return 1.0;
+                      }
+                      return 1.0 - p;
+                    })
+              : 1.0f;
+      current_.push_back({index, entry, occlusion, measured_visibility});
     }
     return current_.back();
+  }
+
+  // measured_visibility: at most the frame's own visibility of the voxel (q_max counts as 1).
+  double limitByMeasurement(double visibility, const CachedVoxel& voxel) const {
+    const double measured =
+        voxel.measured_visibility >= frame_.config.visibility_max ? 1.0 : voxel.measured_visibility;
+    return std::min(visibility, measured);
   }
 
   // OctoMap's rays: misses up to the end voxel, a hit in it (as
@@ -405,6 +513,7 @@ class RayCaster {
         continue;
       }
       visibility = visibilityAfter(visibility, voxel.occlusion, frame_.config);  // Eq. 3
+      visibility = limitByMeasurement(visibility, voxel);
       if (visibility < frame_.config.visibility_min) {
         ++counters_.rays_invisible;
         return;
@@ -429,6 +538,7 @@ class RayCaster {
     for (std::size_t j = 0; j < max_steps; ++j) {
       const CachedVoxel& voxel = lookUp(ray.current(), j, true);
       visibility = visibilityAfter(visibility, voxel.occlusion, f.config);  // Eq. 3
+      visibility = limitByMeasurement(visibility, voxel);
       if (visibility < f.config.visibility_min) {
         ++counters_.rays_invisible;
         return;
@@ -543,6 +653,33 @@ std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3
   return rays;
 }
 
+// measured_prior: the prior of Eq. 4-6 of each never-observed voxel from the frame's
+// measurement, where the measurement says less than unknown_occupancy. measured_inside: P(I_v)
+// of Eq. 8 at most the measurement's.
+void applyMeasurement(const VoxelMap& map, const NeighbourReading& reading,
+                      const VisibilityStereoConfig& config, int threads,
+                      std::vector<StereoVoxelUpdate>* updates) {
+  const long count = static_cast<long>(updates->size());
+#pragma omp parallel num_threads(threads)
+  {
+    MapSnapshot snapshot(map);
+#pragma omp for schedule(static)
+    for (long i = 0; i < count; ++i) {
+      StereoVoxelUpdate& update = (*updates)[i];
+      double p_measured = 0, p_back = 0;
+      if (!reading.measuredProbability(update.index, 0.0, &p_measured)) continue;
+      if (config.measured_inside) {
+        // Inside where the surface lies in front of the voxel's back.
+        reading.measuredProbability(update.index, reading.face_offset, &p_back);
+        update.p_inside = static_cast<float>(std::min<double>(update.p_inside, p_back));
+      }
+      if (config.measured_prior && std::isnan(snapshot.logOdds(update.index))) {
+        update.prior = static_cast<float>(std::min(config.unknown_occupancy, p_measured));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -556,7 +693,7 @@ VisibilityStereoIntegrator::VisibilityStereoIntegrator(const VisibilityStereoCon
 StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
     const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
-    std::vector<StereoVoxelUpdate>* updates) const {
+    std::vector<StereoVoxelUpdate>* updates, const MeasuredSurface* surface) const {
   if (range_sigmas.size() != points_in_map.size()) {
     throw std::invalid_argument("range_sigmas must have one entry per point");
   }
@@ -569,10 +706,28 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   }
   const double resolution = map.resolution();
   // logit(0) = -inf and logit(1) = +inf order correctly in Eq. 1's minimum.
-  const NeighbourReading neighbours{config_.unknown_neighbours == UnknownNeighbours::kKnownOnly,
-                                    logit(config_.unknown_neighbour_occupancy)};
-  const FrameContext frame{config_,    phi_,      sensor_origin, map.indexOf(sensor_origin),
-                           resolution, neighbours};
+  const bool measured = config_.unknown_neighbours == UnknownNeighbours::kMeasured &&
+                        surface != nullptr && !surface->empty();
+  const NeighbourReading neighbours{
+      config_.unknown_neighbours == UnknownNeighbours::kKnownOnly,
+      logit(config_.unknown_neighbour_occupancy),
+      measured ? surface : nullptr,
+      measured ? config_.disparity.disparity_sigma_px / surface->focalBaseline() : 0.0,
+      &phi_,
+      resolution,
+      config_.measured_sigma_min_voxels * resolution,
+      config_.measured_sigma_max_voxels * resolution,
+      config_.measured_fuse_known,
+      map.minLogOdds(),
+      map.maxLogOdds(),
+      0.5 * resolution};
+  const FrameContext frame{config_,
+                           phi_,
+                           sensor_origin,
+                           map.indexOf(sensor_origin),
+                           resolution,
+                           neighbours,
+                           measured && config_.measured_visibility};
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
   std::size_t skipped = 0;
   std::vector<std::uint32_t> bundles;
@@ -624,6 +779,9 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   updates->erase(std::remove_if(updates->begin(), updates->end(),
                                 [](const StereoVoxelUpdate& u) { return !(u.visibility > 0); }),
                  updates->end());
+  if (measured && (config_.measured_prior || config_.measured_inside)) {
+    applyMeasurement(map, neighbours, config_, threads, updates);
+  }
   stats.skipped_points = skipped;
   stats.rays = config_.bundle_rays ? bundles.size() : stats.points - skipped;
   stats.merged_points = stats.points - skipped - stats.rays;
@@ -659,8 +817,9 @@ void VisibilityStereoIntegrator::apply(const std::vector<StereoVoxelUpdate>& upd
         continue;
       }
       const float old_value = block.log_odds[linear];
-      const double p_old = VoxelBlock::isKnown(old_value) ? probabilityFromLogOdds(old_value)
-                                                          : config_.unknown_occupancy;
+      const double p_unknown = update.prior >= 0 ? update.prior : config_.unknown_occupancy;
+      const double p_old =
+          VoxelBlock::isKnown(old_value) ? probabilityFromLogOdds(old_value) : p_unknown;
       const double p_new =
           occupancyAfterInterpolatedMeasurement(p_old, update.p_inside, update.visibility, config_);
       // Clamped like OctoMap, to the map's [clamp_min, clamp_max].
@@ -671,11 +830,11 @@ void VisibilityStereoIntegrator::apply(const std::vector<StereoVoxelUpdate>& upd
 
 StereoIntegrationStats VisibilityStereoIntegrator::integrate(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
-    const Eigen::Vector3d& sensor_origin, VoxelMap* map) const {
+    const Eigen::Vector3d& sensor_origin, VoxelMap* map, const MeasuredSurface* surface) const {
   const auto start = std::chrono::steady_clock::now();
   std::vector<StereoVoxelUpdate> updates;
   StereoIntegrationStats stats =
-      computeUpdates(points_in_map, range_sigmas, sensor_origin, *map, &updates);
+      computeUpdates(points_in_map, range_sigmas, sensor_origin, *map, &updates, surface);
   if (!updates.empty()) {
     map->setFocus(sensor_origin);
     apply(updates, map);
@@ -705,6 +864,16 @@ void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& 
   if (dropped_uncertain != nullptr) *dropped_uncertain = camera_points.dropped_uncertain;
 }
 
+MeasuredSurface VisibilityStereoIntegrator::measuredSurface(
+    const DisparityImageView& disparity, const StereoCamera& camera,
+    const Eigen::Isometry3d& T_map_camera) const {
+  if (config_.unknown_neighbours != UnknownNeighbours::kMeasured ||
+      config_.method != StereoIntegrationMethod::kVisibility) {
+    return {};
+  }
+  return MeasuredSurface(disparity, camera, T_map_camera, config_.measured_surface);
+}
+
 StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImageView& disparity,
                                                              const StereoCamera& camera,
                                                              const Eigen::Isometry3d& T_map_camera,
@@ -715,7 +884,9 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
   std::size_t dropped_uncertain = 0;
   disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr,
                        &dropped_uncertain);
-  StereoIntegrationStats stats = integrate(points, sigmas, T_map_camera.translation(), map);
+  const MeasuredSurface surface = measuredSurface(disparity, camera, T_map_camera);
+  StereoIntegrationStats stats =
+      integrate(points, sigmas, T_map_camera.translation(), map, &surface);
   stats.dropped_uncertain = dropped_uncertain;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;

@@ -29,13 +29,13 @@
 
 namespace occupancy_fusion {
 
-int runPublish(const CommandLine& args);  // benchmark_publish.cpp
-int runDepth(const CommandLine& args);    // benchmark_depth.cpp
-int runDepthFig5(const CommandLine& args);      // benchmark_depth_fig5.cpp
-int runDepthAccuracy(const CommandLine& args);  // benchmark_depth_accuracy.cpp
-int runLaser(const CommandLine& args);    // benchmark_laser.cpp
-int runLaserMap(const CommandLine& args);  // benchmark_laser_map.cpp
-int runDisparity(const CommandLine& args);  // benchmark_disparity.cpp
+int runPublish(const CommandLine& args);             // benchmark_publish.cpp
+int runDepth(const CommandLine& args);               // benchmark_depth.cpp
+int runDepthFig5(const CommandLine& args);           // benchmark_depth_fig5.cpp
+int runDepthAccuracy(const CommandLine& args);       // benchmark_depth_accuracy.cpp
+int runLaser(const CommandLine& args);               // benchmark_laser.cpp
+int runLaserMap(const CommandLine& args);            // benchmark_laser_map.cpp
+int runDisparity(const CommandLine& args);           // benchmark_disparity.cpp
 int runDisparityArtifacts(const CommandLine& args);  // benchmark_disparity_artifacts.cpp
 
 namespace {
@@ -216,8 +216,8 @@ const std::vector<Workload>& workloads() {
        "      Pirker et al. Sec. 5.1: N of the 181 sweep views of BOX / SPHERES; surface points\n"
        "      within one voxel of the p = 0.5 iso-surface, observed free voxels labelled free",
        {"scenes", "methods", "views", "resolution", "k", "sigma", "sigma_quadratic",
-        "unknown_behind_sigmas", "max_range", "clamp", "observe_views", "score_every",
-        "points_csv", "region", "finer_layers"},
+        "unknown_behind_sigmas", "max_range", "clamp", "observe_views", "score_every", "points_csv",
+        "region", "finer_layers"},
        runDepthAccuracy},
       {"laser",
        "<CARMEN log, .gz accepted> [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"
@@ -247,23 +247,63 @@ const std::vector<Workload>& workloads() {
        "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
        "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
        "      the same points; ratios are ours / octomap",
-       {"folder", "resolution", "input", "source", "frames", "warmup", "repetitions", "jitter",
-        "jitter_deg", "sigma", "block_size", "threads", "clock", "rtabmap", "picture",
-        "picture_scene", "picture_resolution", "unknown_neighbour_occupancy", "parameter_set",
-        "bundle_rays", "method"},
+       {"folder",
+        "resolution",
+        "input",
+        "source",
+        "frames",
+        "warmup",
+        "repetitions",
+        "jitter",
+        "jitter_deg",
+        "sigma",
+        "block_size",
+        "threads",
+        "clock",
+        "rtabmap",
+        "picture",
+        "picture_scene",
+        "picture_resolution",
+        "unknown_neighbour_occupancy",
+        "parameter_set",
+        "bundle_rays",
+        "method"},
        runDisparity},
       {"disparity-artifacts",
-       "[--part all|artifacts|fig5a|sweep] [--frames N] [--resolution R] [--fig5a_updates U]\n"
-       "      [--unknown_neighbours prior|known_only] [--unknown_neighbour_occupancy P] [--images DIR]\n"
+       "[--part all|artifacts|fig5a|sweep|matrix] [--frames N] [--resolution R] [--fig5a_updates "
+       "U]\n"
+       "      [--unknown_neighbours prior|known_only] [--unknown_neighbour_occupancy P] [--images "
+       "DIR]\n"
        "      [--parameter_set table_i|fast_expansion]\n"
        "      [--q_max Q] [--q_min Q] [--p_visible_occluded P] [--p_hit_invisible P]\n"
        "      Schauwecker & Zell Sec. IV-A on the simulated corridor with correlated disparity\n"
        "      errors: false-occupied voxels and surface coverage of the visibility method, the\n"
        "      OctoMap mode and OcTree::insertPointCloud on the same points; Fig. 5a's growth;\n"
-       "      sweep: the last four (and --resolution) as comma lists, one line per combination",
-       {"part", "frames", "resolution", "fig5a_updates", "unknown_neighbours",
-        "unknown_neighbour_occupancy", "images", "q_max", "q_min", "p_visible_occluded",
-        "p_hit_invisible", "parameter_set"},
+       "      sweep: the last four (and --resolution) as comma lists, one line per combination;\n"
+       "      matrix [--motions M,..] [--inputs full,half] [--resolution R,..] [--curves CSV]:\n"
+       "      a moving camera (forward 0.03/0.1/0.2 m, turning 5 deg, sideways, standing per\n"
+       "      frame), the set under test, Table I and the OctoMap mode after every frame",
+       {"part",
+        "frames",
+        "resolution",
+        "fig5a_updates",
+        "unknown_neighbours",
+        "unknown_neighbour_occupancy",
+        "images",
+        "q_max",
+        "q_min",
+        "p_visible_occluded",
+        "p_hit_invisible",
+        "parameter_set",
+        "motions",
+        "inputs",
+        "curves",
+        "measured_window",
+        "measured_sigma_max_voxels",
+        "measured_fuse_known",
+        "measured_prior",
+        "measured_inside",
+        "measured_visibility"},
        runDisparityArtifacts},
   };
   return table;

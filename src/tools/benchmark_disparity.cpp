@@ -151,8 +151,8 @@ struct MapRun {
 
 // P(O) of never-observed neighbours in Eq. 1 (--unknown_neighbour_occupancy); the core's default.
 double g_unknown_neighbour_occupancy = VisibilityStereoConfig().unknown_neighbour_occupancy;
-// The named parameter set (--parameter_set), Table I by default.
-StereoParameterSet g_parameter_set = StereoParameterSet::kTableI;
+// The named parameter set (--parameter_set), the mappers' default (measured) by default.
+StereoParameterSet g_parameter_set = StereoParameterSet::kMeasured;
 // --bundle_rays (one ray per end voxel, VisibilityStereoConfig::bundle_rays) and --method
 // (octomap: our OctoMap mode, whose bundled rays are liboctomap's discretize = true); the core's
 // defaults.
@@ -721,7 +721,7 @@ int runDisparity(const CommandLine& args) {
   options.jitter_m = args.doubleValue("jitter", 0.0);
   options.jitter_deg = args.doubleValue("jitter_deg", 0.0);
   options.sigma_px = args.doubleValue("sigma", 0.5);
-  g_parameter_set = stereoParameterSetFromString(args.value("parameter_set", "table_i"));
+  g_parameter_set = stereoParameterSetFromString(args.value("parameter_set", "measured"));
   g_unknown_neighbour_occupancy =
       args.doubleValue("unknown_neighbour_occupancy", g_unknown_neighbour_occupancy);
   const std::string bundle = args.value("bundle_rays", g_bundle_rays ? "true" : "false");

@@ -236,9 +236,10 @@ cv::Mat plotGrowth(const std::vector<Curve>& curves, int updates) {
 
 // The visibility method's parameters from the command line, each over the defaults (with
 // `lists`, the sweep's, the four swept parameters are left to runSweep).
-VisibilityStereoConfig configFrom(const CommandLine& args, bool lists) {
+VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
+                                  const std::string& default_set = "table_i") {
   VisibilityStereoConfig config = visibilityStereoConfigFor(
-      stereoParameterSetFromString(args.value("parameter_set", "table_i")));
+      stereoParameterSetFromString(args.value("parameter_set", default_set)));
   config.unknown_neighbours = unknownNeighboursFromString(
       args.value("unknown_neighbours", toString(config.unknown_neighbours)));
   config.unknown_neighbour_occupancy =
@@ -249,6 +250,17 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists) {
   config.prob_visible_if_occluded =
       args.doubleValue("p_visible_occluded", config.prob_visible_if_occluded);
   config.prob_hit_invisible = args.doubleValue("p_hit_invisible", config.prob_hit_invisible);
+  config.measured_surface.window_px =
+      args.intValue("measured_window", config.measured_surface.window_px);
+  config.measured_sigma_max_voxels =
+      args.doubleValue("measured_sigma_max_voxels", config.measured_sigma_max_voxels);
+  for (const auto& [option, field] :
+       {std::pair<const char*, bool*>{"measured_fuse_known", &config.measured_fuse_known},
+        {"measured_prior", &config.measured_prior},
+        {"measured_inside", &config.measured_inside},
+        {"measured_visibility", &config.measured_visibility}}) {
+    *field = args.intValue(option, *field) != 0;
+  }
   config.validate();
   return config;
 }
@@ -430,11 +442,20 @@ void runFig5a(const CommandLine& args, const VisibilityStereoConfig& visibility_
 
 }  // namespace
 
+int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& candidate,
+                       const std::vector<double>& resolutions);  // benchmark_disparity_matrix.cpp
+
 int runDisparityArtifacts(const CommandLine& args) {
   const std::string part = args.value("part", "all");
-  const VisibilityStereoConfig config = configFrom(args, part == "sweep");
-  if (part != "all" && part != "artifacts" && part != "fig5a" && part != "sweep") {
-    throw UsageError("--part must be all, artifacts, fig5a or sweep");
+  // The matrix tests the mappers' default; the other parts were measured with Table I.
+  const VisibilityStereoConfig config =
+      configFrom(args, part == "sweep", part == "matrix" ? "measured" : "table_i");
+  if (part != "all" && part != "artifacts" && part != "fig5a" && part != "sweep" &&
+      part != "matrix") {
+    throw UsageError("--part must be all, artifacts, fig5a, sweep or matrix");
+  }
+  if (part == "matrix") {
+    return runDisparityMatrix(args, config, numberList(args, "resolution", 0.1));
   }
   if (part == "sweep") {
     runSweep(args, config);

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/integrators/measured_surface.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/disparity_image.h"
 
@@ -33,9 +34,16 @@ StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& nam
 enum class UnknownNeighbours {
   kPrior,      // an unknown neighbour counts with P(O) = unknown_neighbour_occupancy
   kKnownOnly,  // the minimum of Eq. 1 over the known neighbours only; none known: P(C) = 0
+  // Beyond the paper: an unknown neighbour is read from the current frame's own measurement
+  // (MeasuredSurface): P(O) = Phi((z - z_s) / sigma_z(z_s)), the probability that the measured
+  // surface on its line of sight lies in front of it (Eq. 7's sigma_z). Unknown space in front of
+  // the measured surface is transparent at once, space behind it occludes as a known surface
+  // does; where the image does not say, the prior (unknown_neighbour_occupancy).
+  kMeasured,
 };
 std::string toString(UnknownNeighbours policy);
-UnknownNeighbours unknownNeighboursFromString(const std::string& name);  // "known_only" | "prior"
+UnknownNeighbours unknownNeighboursFromString(
+    const std::string& name);  // "known_only" | "prior" | "measured"
 
 struct VisibilityStereoConfig {
   StereoIntegrationMethod method = StereoIntegrationMethod::kVisibility;
@@ -65,8 +73,32 @@ struct VisibilityStereoConfig {
   // neighbour, so nothing stops the walk past the point (measurements in
   // docs/disparity_method.md).
   UnknownNeighbours unknown_neighbours = UnknownNeighbours::kPrior;
-  // P(O) of a never-observed neighbour in Eq. 1 under kPrior.
+  // P(O) of a never-observed neighbour in Eq. 1 under kPrior (and kMeasured where the image
+  // does not say).
   double unknown_neighbour_occupancy = 0.5;
+  // kMeasured, the frame's measured surface (MeasuredSurface) and how it enters Eq. 1-8 beyond
+  // the paper (docs/disparity_method.md, "Moving camera"). Its depth sigma is Eq. 7's sigma_z,
+  // kept within [sigma_min_voxels, sigma_max_voxels] voxels: at least the voxel's own extent,
+  // at most what lets a far surface (sigma_z of metres) still occlude within a few voxels.
+  MeasuredSurfaceConfig measured_surface;
+  double measured_sigma_min_voxels = 1.0;
+  double measured_sigma_max_voxels = 3.0;
+  // Eq. 1 reads a known neighbour as the map's log-odds plus the measurement's free-space
+  // evidence (at most one clamped miss), not the map's alone: the frame's free space counts
+  // before visibility is decided, and a voxel the map holds near 0.5 does not block a ray that
+  // the frame shows passing.
+  bool measured_fuse_known = true;
+  // The prior of Eq. 4-6 of a never-observed voxel is the measurement's P(O) where that is below
+  // unknown_occupancy: a hit in space the frame's surface shows free (a phantom of a patch shifted
+  // towards the camera, the noise in front of a surface) starts from free.
+  bool measured_prior = true;
+  // P(I_v) of Eq. 8 is at most P(the measured surface lies in front of the voxel's back): a
+  // voxel counts as inside only where the frame's surface agrees with its rays.
+  bool measured_inside = true;
+  // A voxel's visibility on a ray is at most P(the measured surface lies behind the voxel's
+  // front): the space behind the frame's surface is invisible however Eq. 1's minimum reads the
+  // neighbours (a ray grazing a surface always finds one in front of it).
+  bool measured_visibility = true;
   // Eq. 8: the ray stops at the first voxel whose P(I_v) reaches this value
   // ("close to 1"); that voxel gets a full hit, P(O_v | H).
   double inside_stop_probability = 0.99;
@@ -114,10 +146,15 @@ enum class StereoParameterSet {
   // of 0.1 from it. Corridor, 0.2 m: 0.11 of OctoMap's false-occupied voxels at 0.935 of its
   // coverage (80 frames), 0.07 at 0.935 (200 frames).
   kFastExpansion,
+  // Beyond the paper, the default of the mappers: Table I with unknown_neighbours kMeasured, the
+  // visibility of never-observed space from the frame's own measured surface, so that a moving
+  // camera's new view is mapped from its first frames while the correlated matcher errors stay
+  // rejected (docs/disparity_method.md, "Moving camera").
+  kMeasured,
 };
 std::string toString(StereoParameterSet set);
 StereoParameterSet stereoParameterSetFromString(
-    const std::string& name);  // table_i | fast_expansion
+    const std::string& name);  // table_i | fast_expansion | measured
 // The configuration of a named parameter set (every other field at the in-class defaults).
 VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set);
 
@@ -160,6 +197,7 @@ struct StereoVoxelUpdate {
   VoxelIndex index;
   float p_inside = 0.0f;    // max over the frame's rays of P(I_v) (kOctomap: 1 hit, 0 miss)
   float visibility = 0.0f;  // max over the frame's rays of P(V_v) (kOctomap: 1)
+  float prior = -1.0f;      // P(O) of Eq. 4-6 if the voxel is unknown; negative: unknown_occupancy
 };
 
 struct StereoIntegrationStats {
@@ -199,16 +237,20 @@ class VisibilityStereoIntegrator {
   // Points in the map frame seen from sensor_origin, each with the standard
   // deviation of its distance from the origin along its ray (m; sigma_z scaled
   // by range / z for a camera point).
+  // `surface`: the frame's measured surface, read by unknown_neighbours: measured (without it,
+  // that policy reads unknown neighbours as the prior).
   StereoIntegrationStats integrate(const std::vector<Eigen::Vector3f>& points_in_map,
                                    const std::vector<float>& range_sigmas,
-                                   const Eigen::Vector3d& sensor_origin, VoxelMap* map) const;
+                                   const Eigen::Vector3d& sensor_origin, VoxelMap* map,
+                                   const MeasuredSurface* surface = nullptr) const;
 
   // The ray-casting half of integrate(): the frame's reduced updates, reading
   // the map but not writing it. Fills every stats field except seconds.
   StereoIntegrationStats computeUpdates(const std::vector<Eigen::Vector3f>& points_in_map,
                                         const std::vector<float>& range_sigmas,
                                         const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
-                                        std::vector<StereoVoxelUpdate>* updates) const;
+                                        std::vector<StereoVoxelUpdate>* updates,
+                                        const MeasuredSurface* surface = nullptr) const;
   // The writing half: one VoxelMap::updateBlocks call.
   void apply(const std::vector<StereoVoxelUpdate>& updates, VoxelMap* map) const;
 
@@ -219,6 +261,9 @@ class VisibilityStereoIntegrator {
                             std::vector<Eigen::Vector3f>* points_in_map,
                             std::vector<float>* range_sigmas, std::size_t* pixels_read,
                             std::size_t* dropped_uncertain = nullptr) const;
+  // The frame's measured surface when unknown_neighbours is kMeasured, else an empty one.
+  MeasuredSurface measuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
+                                  const Eigen::Isometry3d& T_map_camera) const;
 
  private:
   VisibilityStereoConfig config_;

@@ -1,0 +1,100 @@
+// The stereo evaluation matrix: a moving stereo camera (forward along a corridor at three speeds,
+// turning in place, a sideways pass along a wall with objects, standing) seeing disparity with
+// white noise and persistent patches of wrong disparity, mapped by any stereo configuration;
+// after every frame, false-occupied voxels and the coverage of the surface seen so far against
+// the scene's ground truth. Shared by `benchmark disparity-artifacts --part matrix` and the
+// unit tests.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/eval/stereo_corridor.h"
+#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/sim/scene.h"
+#include "occupancy_fusion/sim/stereo_camera.h"
+
+namespace occupancy_fusion {
+
+enum class StereoMotion {
+  kForward,   // along the corridor's axis, looking ahead; step in m per frame
+  kTurn,      // turning in place about the vertical in the room; step in deg per frame
+  kSideways,  // along the corridor's left wall (a pillar, the doorway), looking at it; m per frame
+  kStanding,  // the forward start pose, unmoved
+};
+
+struct StereoMotionCase {
+  std::string name;  // e.g. "forward_0.10"
+  StereoMotion motion = StereoMotion::kForward;
+  double step = 0.0;
+};
+// forward 0.03, 0.1 and 0.2 m per frame; turning 5 deg per frame; sideways 0.1 m per frame;
+// standing.
+std::vector<StereoMotionCase> stereoMatrixMotions();
+StereoMotionCase stereoMotionCaseFromName(const std::string& name);  // throws on an unknown name
+
+struct StereoMotionSetup {
+  StereoMotionCase motion;
+  int frames = 40;
+  int width = 320, height = 240;
+  double focal_px = 250.0;
+  double baseline = 0.12;  // m
+  double max_range = 8.0;  // m, rendered depth limit
+  sim::DisparityNoise noise = StereoCorridorSetup().noise();
+
+  sim::PinholeCamera camera() const;
+  StereoCamera stereo() const;
+  sim::Scene scene() const;                      // corridor, or the room for kTurn
+  std::vector<Eigen::Isometry3d> poses() const;  // the left optical frame per frame
+};
+
+// The rendered disparity images of a set-up (independent of the mapper).
+struct StereoRecording {
+  StereoMotionSetup setup;
+  std::vector<sim::DisparityImage> images;
+  std::vector<Eigen::Isometry3d> poses;
+};
+StereoRecording renderStereoRecording(const sim::Scene& scene, const StereoMotionSetup& setup);
+
+// Ground truth of one voxel size: surface samples `resolution` apart, each with the first frame
+// that sees it (in the image, within max_range, not occluded), and a cache of voxel classes.
+class StereoGroundTruth {
+ public:
+  StereoGroundTruth(const sim::Scene& scene, const StereoRecording& recording, double resolution);
+
+  struct FrameQuality {
+    std::size_t occupied = 0;
+    std::size_t false_occupied = 0;    // centre in free space, farther than a voxel diagonal from
+                                       // any surface
+    std::size_t surface_occupied = 0;  // the other occupied voxels
+    double coverage = 0.0;             // of the samples seen by frames 0..k: an occupied voxel
+                                       // within one voxel of it
+    std::size_t seen_samples = 0;
+  };
+  // The quality of `occupied` after frame k.
+  FrameQuality evaluate(const OccupiedVoxelSet& occupied, int frame);
+  // Whether a voxel is false-occupied when occupied (cached).
+  bool isFalse(const VoxelIndex& voxel);
+  double resolution() const { return resolution_; }
+
+ private:
+  const sim::Scene& scene_;
+  double resolution_;
+  std::vector<VoxelIndex> sample_voxels_;
+  std::vector<int> first_seen_;  // per sample
+  SpatialKeyMap<bool> is_false_;
+};
+
+// One configuration mapping a recording, evaluated after every frame.
+struct StereoRunCurve {
+  std::vector<StereoGroundTruth::FrameQuality> frames;
+  double seconds = 0.0;  // wall time of the integrate() calls
+  OccupiedVoxelSet final_occupied;
+};
+StereoRunCurve mapStereoRecording(const VisibilityStereoConfig& config,
+                                  const StereoRecording& recording, double resolution,
+                                  StereoGroundTruth* truth);
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,69 @@
+// The surface a disparity image measures, made robust against the correlated errors of a stereo
+// matcher, for the visibility of never-observed space from the measurement itself (the paper's
+// ref. [7], Perrollaz et al., decides visibility in the measurement's own disparity space).
+//
+// A matcher's wrong disparities come in patches that stick to image positions: a patch shifted
+// towards the camera puts a phantom surface into free space, one shifted away makes a hole in a
+// true surface through which the space behind it looks visible. The median disparity over a
+// window several times a patch's size ignores both while the patch covers less than half the
+// window, and on a plane (whose disparity is linear in u and v) it is the plane's own disparity
+// at the window's centre. It is sampled on a grid and read bilinearly in disparity, where a plane
+// stays linear.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "occupancy_fusion/sensors/disparity_image.h"
+
+namespace occupancy_fusion {
+
+struct MeasuredSurfaceConfig {
+  // px, edge of the median's window. Patches of wrong disparity up to half its area are ignored;
+  // a true surface narrower than half the window (a thin pole against a far wall) is read as the
+  // surface behind it, which only delays its visibility to a later frame.
+  int window_px = 25;
+  int grid_step_px = 4;  // px between the grid's surfaces (the wide window is sampled at half)
+  // Fraction of the wide window's symmetric pairs that must be valid. Low: near the range limit
+  // or a hole only the pairs along the boundary are valid, and they still give a plane's depth.
+  double min_valid = 0.03;
+  // px, edge of the small window whose pixels within inlier_px of the wide window's median give
+  // the surface, as the mean of their symmetric pairs: the median of a wide window is biased at a
+  // kink of the surface (a corner, a step) by up to half its width times the change of slope;
+  // the small window's mean only by its own. 0: the median itself.
+  int local_window_px = 5;
+  double inlier_px = 1.0;
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+class MeasuredSurface {
+ public:
+  MeasuredSurface() = default;  // measures nothing: depthAt() is always false
+  // disparity (px) of the left camera whose optical frame has pose T_map_camera.
+  MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
+                  const Eigen::Isometry3d& T_map_camera, const MeasuredSurfaceConfig& config = {});
+
+  bool empty() const { return medians_.empty(); }
+  // For a point in the map frame: its depth z along the optical axis and the depth of the
+  // measured surface on its line of sight, z_surface; false where the image does not say
+  // (behind the camera, outside the image, no median near the pixel).
+  bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface) const;
+  // The median disparity at grid cell (i, j) (pixel (i, j) * grid_step_px), NaN where invalid.
+  float medianAt(int i, int j) const {
+    return medians_[static_cast<std::size_t>(j) * columns_ + i];
+  }
+  double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
+  int columns() const { return columns_; }
+  int rows() const { return rows_; }
+
+ private:
+  double disparityAt(double u, double v) const;  // bilinear over valid grid medians, or NaN
+
+  Eigen::Isometry3d T_camera_map_ = Eigen::Isometry3d::Identity();
+  double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0, focal_baseline_ = 0;
+  int width_ = 0, height_ = 0, step_ = 1, columns_ = 0, rows_ = 0;
+  std::vector<float> medians_;  // row-major, columns_ x rows_
+};
+
+}  // namespace occupancy_fusion

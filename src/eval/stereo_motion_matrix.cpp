@@ -1,0 +1,197 @@
+#include "occupancy_fusion/eval/stereo_motion_matrix.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+#include "occupancy_fusion/integrators/ray_traversal.h"
+#include "occupancy_fusion/sim/scenes.h"
+#include "occupancy_fusion/sim/trajectory.h"
+
+namespace occupancy_fusion {
+
+namespace {
+
+std::string motionName(const std::string& kind, double step) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%s_%.2f", kind.c_str(), step);
+  return text;
+}
+
+}  // namespace
+
+std::vector<StereoMotionCase> stereoMatrixMotions() {
+  return {{motionName("forward", 0.03), StereoMotion::kForward, 0.03},
+          {motionName("forward", 0.10), StereoMotion::kForward, 0.10},
+          {motionName("forward", 0.20), StereoMotion::kForward, 0.20},
+          {"turn_5deg", StereoMotion::kTurn, 5.0},
+          {motionName("sideways", 0.10), StereoMotion::kSideways, 0.10},
+          {"standing", StereoMotion::kStanding, 0.0}};
+}
+
+StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
+  std::string known;
+  for (const StereoMotionCase& motion : stereoMatrixMotions()) {
+    if (motion.name == name) return motion;
+    known += (known.empty() ? "" : ", ") + motion.name;
+  }
+  throw std::invalid_argument("unknown motion '" + name + "' (known: " + known + ")");
+}
+
+sim::PinholeCamera StereoMotionSetup::camera() const {
+  sim::PinholeCamera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = camera.fy = focal_px;
+  camera.cx = 0.5 * (width - 1);
+  camera.cy = 0.5 * (height - 1);
+  return camera;
+}
+
+StereoCamera StereoMotionSetup::stereo() const {
+  const sim::PinholeCamera c = camera();
+  return {c.fx, c.fy, c.cx, c.cy, baseline};
+}
+
+sim::Scene StereoMotionSetup::scene() const {
+  return motion.motion == StereoMotion::kTurn ? sim::makeRoomScene() : sim::makeCorridorScene();
+}
+
+std::vector<Eigen::Isometry3d> StereoMotionSetup::poses() const {
+  constexpr double kHeight = 1.2;  // m
+  const Eigen::Isometry3d optical = sim::opticalFrameInBody();
+  std::vector<Eigen::Isometry3d> poses;
+  for (int k = 0; k < frames; ++k) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    switch (motion.motion) {
+      case StereoMotion::kForward:
+      case StereoMotion::kStanding: {
+        const double x = 0.5 + (motion.motion == StereoMotion::kForward ? motion.step * k : 0.0);
+        pose = Eigen::Translation3d(x, 0.0, kHeight) * optical;
+        break;
+      }
+      case StereoMotion::kTurn: {
+        // About the room's free centre, slightly off it so that no wall is seen square on.
+        const double yaw = motion.step * k * M_PI / 180.0;
+        pose = Eigen::Translation3d(0.2, -0.3, kHeight) *
+               Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * optical;
+        break;
+      }
+      case StereoMotion::kSideways: {
+        // 1.6 m from the left wall, pitched 15 deg down, passing the pillar at x = 4 towards the
+        // doorway at x = 7.
+        const double x = 2.0 + motion.step * k;
+        const Eigen::Vector3d eye(x, -0.4, kHeight);
+        pose = sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.0, -std::tan(15.0 * M_PI / 180.0)));
+        break;
+      }
+    }
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+StereoRecording renderStereoRecording(const sim::Scene& scene, const StereoMotionSetup& setup) {
+  StereoRecording recording{setup, {}, setup.poses()};
+  const sim::PinholeCamera camera = setup.camera();
+  recording.images.resize(recording.poses.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < static_cast<int>(recording.poses.size()); ++k) {
+    recording.images[k] = sim::renderDisparity(scene, camera, setup.baseline, recording.poses[k],
+                                               setup.max_range, setup.noise, k);
+  }
+  return recording;
+}
+
+StereoGroundTruth::StereoGroundTruth(const sim::Scene& scene, const StereoRecording& recording,
+                                     double resolution)
+    : scene_(scene), resolution_(resolution) {
+  const std::vector<Eigen::Vector3d> samples = scene.sampleSurface(resolution);
+  const sim::PinholeCamera camera = recording.setup.camera();
+  const double max_range = recording.setup.max_range;
+  first_seen_.assign(samples.size(), -1);
+  sample_voxels_.resize(samples.size());
+  const long count = static_cast<long>(samples.size());
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (long i = 0; i < count; ++i) {
+    const Eigen::Vector3d& sample = samples[i];
+    sample_voxels_[i] = voxelIndexOf(sample, resolution);
+    for (std::size_t k = 0; k < recording.poses.size(); ++k) {
+      const Eigen::Isometry3d& pose = recording.poses[k];
+      const Eigen::Vector3d p = pose.inverse() * sample;
+      if (p.z() <= 0.1 || p.z() > max_range) continue;
+      const double u = camera.fx * p.x() / p.z() + camera.cx;
+      const double v = camera.fy * p.y() / p.z() + camera.cy;
+      if (u < 0 || v < 0 || u > camera.width - 1 || v > camera.height - 1) continue;
+      const Eigen::Vector3d offset = sample - pose.translation();
+      const double distance = offset.norm();
+      const auto t = scene.castRay(pose.translation(), offset / distance, distance + 0.01);
+      if (t && *t >= distance - 0.02) {
+        first_seen_[i] = static_cast<int>(k);
+        break;
+      }
+    }
+  }
+}
+
+bool StereoGroundTruth::isFalse(const VoxelIndex& voxel) {
+  const std::uint64_t key = packKey(voxel);
+  const auto it = is_false_.find(key);
+  if (it != is_false_.end()) return it->second;
+  const Eigen::Vector3d center = (voxel.cast<double>().array() + 0.5) * resolution_;
+  const double tolerance = std::sqrt(3.0) * resolution_;  // one voxel diagonal
+  const bool wrong = !scene_.isOccupied(center) && scene_.distanceToSurface(center) > tolerance;
+  is_false_.emplace(key, wrong);
+  return wrong;
+}
+
+StereoGroundTruth::FrameQuality StereoGroundTruth::evaluate(const OccupiedVoxelSet& occupied,
+                                                            int frame) {
+  FrameQuality quality;
+  quality.occupied = occupied.voxels.size();
+  for (const VoxelIndex& voxel : occupied.voxels) quality.false_occupied += isFalse(voxel) ? 1 : 0;
+  quality.surface_occupied = quality.occupied - quality.false_occupied;
+  std::size_t seen = 0, covered = 0;
+  const long count = static_cast<long>(first_seen_.size());
+#pragma omp parallel for schedule(static) reduction(+ : seen, covered)
+  for (long i = 0; i < count; ++i) {
+    if (first_seen_[i] < 0 || first_seen_[i] > frame) continue;
+    ++seen;
+    bool found = false;
+    for (int dz = -1; dz <= 1 && !found; ++dz) {
+      for (int dy = -1; dy <= 1 && !found; ++dy) {
+        for (int dx = -1; dx <= 1 && !found; ++dx) {
+          found = occupied.contains(sample_voxels_[i] + VoxelIndex(dx, dy, dz));
+        }
+      }
+    }
+    covered += found ? 1 : 0;
+  }
+  quality.seen_samples = seen;
+  quality.coverage = seen == 0 ? 0.0 : static_cast<double>(covered) / seen;
+  return quality;
+}
+
+StereoRunCurve mapStereoRecording(const VisibilityStereoConfig& config,
+                                  const StereoRecording& recording, double resolution,
+                                  StereoGroundTruth* truth) {
+  const VisibilityStereoIntegrator integrator(config);
+  VoxelMapConfig map_config;
+  map_config.resolution = resolution;
+  VoxelMap map(map_config);
+  const StereoCamera stereo = recording.setup.stereo();
+  StereoRunCurve curve;
+  for (std::size_t k = 0; k < recording.images.size(); ++k) {
+    const sim::DisparityImage& image = recording.images[k];
+    const DisparityImageView view{image.width, image.height, image.disparity.data(), 0};
+    curve.seconds += integrator.integrate(view, stereo, recording.poses[k], &map).seconds;
+    curve.frames.push_back(truth->evaluate(occupiedVoxelsOf(map), static_cast<int>(k)));
+  }
+  curve.final_occupied = occupiedVoxelsOf(map);
+  return curve;
+}
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,149 @@
+// MeasuredSurface: the depth a disparity image measures on a point's line of sight, robust
+// against patches of wrong disparity, against a plane's analytic disparity.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "occupancy_fusion/integrators/measured_surface.h"
+
+namespace occupancy_fusion {
+namespace {
+
+constexpr int kWidth = 160, kHeight = 120;
+const StereoCamera kCamera{125.0, 125.0, 79.5, 59.5, 0.12};
+
+// A slanted plane in the camera frame, n . p = c: its disparity is linear in (u, v),
+// d = f b (n . ((u - cx) / fx, (v - cy) / fy, 1)) / c.
+struct Plane {
+  Eigen::Vector3d normal{0.3, -0.2, 1.0};
+  double offset = 4.0;
+
+  double disparity(double u, double v) const {
+    const Eigen::Vector3d ray((u - kCamera.cx) / kCamera.fx, (v - kCamera.cy) / kCamera.fy, 1.0);
+    return kCamera.fx * kCamera.baseline * normal.dot(ray) / offset;
+  }
+  double depth(double u, double v) const { return kCamera.fx * kCamera.baseline / disparity(u, v); }
+};
+
+std::vector<float> planeImage(const Plane& plane) {
+  std::vector<float> image(static_cast<std::size_t>(kWidth) * kHeight);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      image[static_cast<std::size_t>(v) * kWidth + u] = static_cast<float>(plane.disparity(u, v));
+    }
+  }
+  return image;
+}
+
+MeasuredSurface surfaceOf(const std::vector<float>& image) {
+  const DisparityImageView view{kWidth, kHeight, image.data(), 0};
+  return MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity());
+}
+
+// The point at depth z on pixel (u, v)'s line of sight, in the camera (= map) frame.
+Eigen::Vector3d pointAt(double u, double v, double z) {
+  return {z * (u - kCamera.cx) / kCamera.fx, z * (v - kCamera.cy) / kCamera.fy, z};
+}
+
+double surfaceDepth(const MeasuredSurface& surface, double u, double v) {
+  double z = 0, z_surface = 0;
+  if (!surface.depthAt(pointAt(u, v, 2.0), &z, &z_surface)) return std::nan("");
+  EXPECT_NEAR(z, 2.0, 1e-9);
+  return z_surface;
+}
+
+TEST(MeasuredSurface, GivesAPlanesDepthAtEveryPixel) {
+  const Plane plane;
+  const MeasuredSurface surface = surfaceOf(planeImage(plane));
+  // Up to the image's borders, its last column and row included (not its very corners, where
+  // no window has enough symmetric pairs).
+  for (double v : {2.0, 13.3, 59.5, 101.7, 119.0}) {
+    for (double u : {2.0, 7.2, 79.5, 120.9, 159.0}) {
+      EXPECT_NEAR(surfaceDepth(surface, u, v), plane.depth(u, v), 1e-4 * plane.depth(u, v))
+          << "pixel " << u << ", " << v;
+    }
+  }
+}
+
+TEST(MeasuredSurface, KeepsAPlanesDepthNextToInvalidPixels) {
+  // Beyond a diagonal line nothing is measured (a range limit): one-sided windows would read a
+  // slanted plane as its nearer part; symmetric pairs do not.
+  const Plane plane;
+  std::vector<float> image = planeImage(plane);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      if (u + v > 170) image[static_cast<std::size_t>(v) * kWidth + u] = std::nanf("");
+    }
+  }
+  const MeasuredSurface surface = surfaceOf(image);
+  int checked = 0;
+  for (int v = 40; v < kHeight; v += 7) {
+    const int u = 168 - v;  // 2 px inside the valid part
+    if (u < 0 || u >= kWidth) continue;
+    const double measured = surfaceDepth(surface, u, v);
+    if (std::isnan(measured)) continue;  // too few pairs: the image does not say
+    EXPECT_NEAR(measured, plane.depth(u, v), 1e-3 * plane.depth(u, v))
+        << "pixel " << u << ", " << v;
+    ++checked;
+  }
+  EXPECT_GE(checked, 8);
+}
+
+TEST(MeasuredSurface, IgnoresPatchesOfWrongDisparity) {
+  // A patch of 12 x 12 px shifted away from the camera (a hole through which the space behind
+  // the plane looks visible) and one shifted towards it (a phantom surface in front).
+  const Plane plane;
+  std::vector<float> image = planeImage(plane);
+  auto shift = [&](int u0, int v0, float offset) {
+    for (int v = v0; v < v0 + 12; ++v) {
+      for (int u = u0; u < u0 + 12; ++u) image[static_cast<std::size_t>(v) * kWidth + u] += offset;
+    }
+  };
+  shift(40, 40, -1.5f);
+  shift(100, 60, +1.5f);
+  const MeasuredSurface surface = surfaceOf(image);
+  for (const auto& [u, v] : {std::pair<double, double>{46, 46}, {41, 51}, {106, 66}, {111, 61}}) {
+    const double truth = plane.depth(u, v);
+    // The patch itself is 0.1 to 0.3 m off (1.5 px at 3-6 px of disparity).
+    const double patch_depth =
+        kCamera.fx * kCamera.baseline / (plane.disparity(u, v) + (u < 80 ? -1.5 : 1.5));
+    ASSERT_GT(std::abs(patch_depth - truth), 0.3);
+    EXPECT_NEAR(surfaceDepth(surface, u, v), truth, 0.02 * truth) << "pixel " << u << ", " << v;
+  }
+}
+
+TEST(MeasuredSurface, SaysNothingOutsideTheImageOrBehindTheCamera) {
+  const Plane plane;
+  const MeasuredSurface surface = surfaceOf(planeImage(plane));
+  double z = 0, z_surface = 0;
+  EXPECT_FALSE(surface.depthAt({0.0, 0.0, -1.0}, &z, &z_surface));           // behind
+  EXPECT_FALSE(surface.depthAt(pointAt(-5.0, 60.0, 2.0), &z, &z_surface));   // left of the image
+  EXPECT_FALSE(surface.depthAt(pointAt(80.0, 125.0, 2.0), &z, &z_surface));  // below it
+  EXPECT_FALSE(MeasuredSurface().depthAt(pointAt(80.0, 60.0, 2.0), &z, &z_surface));
+  // An image without valid disparity measures nothing.
+  const std::vector<float> empty(static_cast<std::size_t>(kWidth) * kHeight,
+                                 std::numeric_limits<float>::quiet_NaN());
+  EXPECT_FALSE(surfaceOf(empty).depthAt(pointAt(80.0, 60.0, 2.0), &z, &z_surface));
+}
+
+TEST(MeasuredSurface, RejectsBadConfigurations) {
+  const std::vector<float> image = planeImage(Plane());
+  const DisparityImageView view{kWidth, kHeight, image.data(), 0};
+  auto rejects = [&](auto change) {
+    MeasuredSurfaceConfig config;
+    change(config);
+    EXPECT_THROW(MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity(), config),
+                 std::invalid_argument);
+  };
+  rejects([](MeasuredSurfaceConfig& c) { c.window_px = 0; });
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_step_px = 0; });
+  rejects([](MeasuredSurfaceConfig& c) { c.min_valid = 0.0; });
+  rejects([](MeasuredSurfaceConfig& c) { c.local_window_px = 99; });
+  rejects([](MeasuredSurfaceConfig& c) { c.inlier_px = 0.0; });
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
