@@ -97,9 +97,12 @@ Run mapWithLiboctomap(const std::vector<StereoFrame>& frames, double resolution)
 // where one is false-occupied; the ground-truth walls at camera height in grey, the trajectory
 // in blue.
 
-cv::Mat topView(const Run& run, const sim::Scene& scene, double resolution,
-                const std::vector<Eigen::Isometry3d>& poses, double camera_height) {
-  constexpr double kMinX = -1.0, kMaxX = 13.0, kMinY = -4.0, kMaxY = 4.0;
+}  // namespace
+
+cv::Mat stereoTopView(const std::string& title, const OccupiedVoxelSet& occupied,
+                      const std::vector<bool>& is_false, const sim::Scene& scene, double resolution,
+                      const std::vector<Eigen::Isometry3d>& poses, double camera_height) {
+  constexpr double kMinX = -4.5, kMaxX = 13.0, kMinY = -4.0, kMaxY = 4.0;
   constexpr int kPixelsPerMetre = 40;
   const int width = static_cast<int>((kMaxX - kMinX) * kPixelsPerMetre);
   const int height = static_cast<int>((kMaxY - kMinY) * kPixelsPerMetre);
@@ -119,28 +122,44 @@ cv::Mat topView(const Run& run, const sim::Scene& scene, double resolution,
   const int z_min = static_cast<int>(std::floor(0.2 / resolution));
   const int z_max = static_cast<int>(std::floor(2.3 / resolution));
   SpatialKeyMap<bool> columns;  // (x, y) -> has a false-occupied voxel
-  for (std::size_t i = 0; i < run.occupied.voxels.size(); ++i) {
-    const VoxelIndex& v = run.occupied.voxels[i];
+  std::size_t false_count = 0;
+  for (std::size_t i = 0; i < occupied.voxels.size(); ++i) {
+    const VoxelIndex& v = occupied.voxels[i];
+    false_count += is_false[i] ? 1 : 0;
     if (v.z() < z_min || v.z() > z_max) continue;
     bool& wrong = columns[packKey(VoxelIndex(v.x(), v.y(), 0))];
-    wrong = wrong || run.quality.is_false[i];
+    wrong = wrong || is_false[i];
   }
   for (const auto& [key, wrong] : columns) {
     const VoxelIndex v = unpackKey3(key);
     const cv::Point corner = pixelOf(v.x() * resolution, (v.y() + 1) * resolution);
-    const int size = static_cast<int>(std::lround(resolution * kPixelsPerMetre));
+    const int size = std::max(1, static_cast<int>(std::lround(resolution * kPixelsPerMetre)));
     cv::rectangle(image, cv::Rect(corner.x, corner.y, size, size),
                   wrong ? cv::Scalar(0, 0, 230) : cv::Scalar(40, 40, 40), cv::FILLED);
   }
-  cv::line(image, pixelOf(poses.front().translation().x(), 0.0),
-           pixelOf(poses.back().translation().x(), 0.0), cv::Scalar(230, 90, 0), 2);
-  char title[200];
-  std::snprintf(title, sizeof(title), "%s: %zu occupied, %zu false-occupied, coverage %.3f",
-                run.name.c_str(), run.quality.occupied, run.quality.false_occupied,
-                run.quality.coverage);
-  cv::putText(image, title, cv::Point(6, 17), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
+  for (std::size_t k = 1; k < poses.size(); ++k) {
+    cv::line(image, pixelOf(poses[k - 1].translation().x(), poses[k - 1].translation().y()),
+             pixelOf(poses[k].translation().x(), poses[k].translation().y()),
+             cv::Scalar(230, 90, 0), 2);
+  }
+  cv::circle(image, pixelOf(poses.back().translation().x(), poses.back().translation().y()), 4,
+             cv::Scalar(230, 90, 0), cv::FILLED);
+  char text[300];
+  std::snprintf(text, sizeof(text), "%s: %zu occupied, %zu false-occupied", title.c_str(),
+                occupied.voxels.size(), false_count);
+  cv::putText(image, text, cv::Point(6, 17), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
               cv::LINE_AA);
   return image;
+}
+
+namespace {
+
+cv::Mat topView(const Run& run, const sim::Scene& scene, double resolution,
+                const std::vector<Eigen::Isometry3d>& poses, double camera_height) {
+  char title[200];
+  std::snprintf(title, sizeof(title), "%s (coverage %.3f)", run.name.c_str(), run.quality.coverage);
+  return stereoTopView(title, run.occupied, run.quality.is_false, scene, resolution, poses,
+                       camera_height);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 // benchmark disparity-artifacts --part matrix: the stereo methods on a moving camera
 // (eval/stereo_motion_matrix.h). For every cell (motion x voxel size x input resolution) and
-// method (the configuration under test, the paper's Table I, the OctoMap mode on the same rays):
+// method (the set under test, by default the mappers' measured, the paper's Table I, the OctoMap
+// mode on the same rays):
 // false-occupied voxels and surface coverage after every frame, as ratios to the OctoMap mode of
 // the same frame, and the cell's worst ratio from the 5th frame on.
 #include <algorithm>
@@ -9,10 +10,19 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "occupancy_fusion/eval/stereo_motion_matrix.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {
+
+// benchmark_disparity_artifacts.cpp: occupied voxels seen from above, false ones red.
+cv::Mat stereoTopView(const std::string& title, const OccupiedVoxelSet& occupied,
+                      const std::vector<bool>& is_false, const sim::Scene& scene, double resolution,
+                      const std::vector<Eigen::Isometry3d>& poses, double camera_height);
+
 namespace {
 
 constexpr int kFirstJudgedFrame = 4;  // the 5th frame: the goals hold from it on
@@ -22,11 +32,12 @@ struct MethodUnderTest {
   VisibilityStereoConfig config;
 };
 
-struct CellResult {
-  std::string motion;
-  double resolution = 0;
-  std::string input;
-  std::vector<StereoRunCurve> curves;  // per method, [last] the OctoMap mode
+// The cell whose default has the lowest coverage ratio, kept for its pictures.
+struct WorstCell {
+  double coverage_ratio = 1e9;
+  std::string name;
+  std::vector<cv::Mat> top_views;  // per method
+  std::vector<StereoRunCurve> runs;
 };
 
 // Worst ratios to the OctoMap mode from the 5th frame on: lowest coverage, highest false count.
@@ -60,6 +71,66 @@ WorstRatios worstRatios(const StereoRunCurve& curve, const StereoRunCurve& octom
   return worst;
 }
 
+// Coverage and false-occupied ratios to the OctoMap mode per frame: the lag of each method.
+cv::Mat plotRatios(const WorstCell& cell, const std::vector<std::string>& names) {
+  constexpr int kWidth = 640, kHeight = 360, kLeft = 50, kBottom = 40, kTop = 30;
+  constexpr double kMaxRatio = 1.2;
+  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
+  const StereoRunCurve& reference = cell.runs.back();
+  const std::size_t frames = reference.frames.size();
+  auto pixel = [&](double frame, double ratio) {
+    return cv::Point(
+        kLeft + static_cast<int>((frame - 1) / (frames - 1) * (kWidth - kLeft - 20)),
+        kHeight - kBottom -
+            static_cast<int>(std::min(ratio, kMaxRatio) / kMaxRatio * (kHeight - kBottom - kTop)));
+  };
+  for (double goal : {0.2, 0.9}) {
+    cv::line(image, pixel(1, goal), pixel(frames, goal), cv::Scalar(180, 180, 180), 1);
+  }
+  cv::line(image, pixel(5, 0), pixel(5, kMaxRatio), cv::Scalar(220, 220, 220), 1);
+  const cv::Scalar colours[] = {cv::Scalar(200, 80, 0), cv::Scalar(0, 160, 0)};
+  for (std::size_t m = 0; m + 1 < cell.runs.size() && m < 2; ++m) {
+    for (std::size_t k = 1; k < frames; ++k) {
+      auto coverage = [&](std::size_t f) {
+        const double r = reference.frames[f].coverage;
+        return r > 0 ? cell.runs[m].frames[f].coverage / r : 1.0;
+      };
+      auto false_ratio = [&](std::size_t f) {
+        return falseRatio(cell.runs[m].frames[f].false_occupied,
+                          reference.frames[f].false_occupied);
+      };
+      cv::line(image, pixel(k, coverage(k - 1)), pixel(k + 1, coverage(k)), colours[m], 2,
+               cv::LINE_AA);
+      cv::line(image, pixel(k, false_ratio(k - 1)), pixel(k + 1, false_ratio(k)), colours[m], 1,
+               cv::LINE_AA);
+    }
+  }
+  char text[300];
+  std::snprintf(text, sizeof(text),
+                "%s: coverage (thick) and false-occupied (thin) / OctoMap mode; blue %s, green %s",
+                cell.name.c_str(), names[0].c_str(), names[1].c_str());
+  cv::putText(image, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  for (double tick : {0.0, 0.2, 0.5, 0.9, 1.0}) {
+    std::snprintf(text, sizeof(text), "%.1f", tick);
+    cv::putText(image, text, pixel(1, tick) + cv::Point(-40, 4), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  for (std::size_t frame : {std::size_t{1}, std::size_t{5}, frames / 2, frames}) {
+    std::snprintf(text, sizeof(text), "%zu", frame);
+    cv::putText(image, text, pixel(frame, 0) + cv::Point(-6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  cv::putText(image, "frame", cv::Point(kWidth / 2, kHeight - 6), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return image;
+}
+
+void writeImage(const std::string& path, const cv::Mat& image) {
+  if (!cv::imwrite(path, image)) throw UsageError("cannot write " + path);
+  std::printf("wrote %s\n", path.c_str());
+}
+
 }  // namespace
 
 int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& candidate,
@@ -79,6 +150,8 @@ int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& ca
   const int frames = args.intValue("frames", 40);
   if (frames <= kFirstJudgedFrame) throw UsageError("--frames must be at least 5");
   const std::string curves_path = args.value("curves", "");
+  const std::string images = args.value("images", "");
+  WorstCell worst_cell;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> curves(nullptr, &std::fclose);
   if (!curves_path.empty()) {
     curves.reset(std::fopen(curves_path.c_str(), "w"));
@@ -104,13 +177,35 @@ int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& ca
       StereoGroundTruth truth(scene, recording, resolution);
       for (InputResolution input : inputs) {
         std::vector<MethodUnderTest> methods = {
-            {"candidate", candidate}, {"table_i", table_i}, {"octomap_mode", octomap}};
+            {args.value("parameter_set", "measured"), candidate},
+            {"table_i", table_i},
+            {"octomap_mode", octomap}};
         for (MethodUnderTest& method : methods) method.config.disparity.input_resolution = input;
         std::vector<StereoRunCurve> runs;
         for (const MethodUnderTest& method : methods) {
           runs.push_back(mapStereoRecording(method.config, recording, resolution, &truth));
         }
         const StereoRunCurve& reference = runs.back();
+        const double coverage_ratio = worstRatios(runs.front(), reference).coverage;
+        if (!images.empty() && coverage_ratio < worst_cell.coverage_ratio) {
+          worst_cell.coverage_ratio = coverage_ratio;
+          char name[160];
+          std::snprintf(name, sizeof(name), "%s, %.2f m, %s input", motion.name.c_str(), resolution,
+                        toString(input).c_str());
+          worst_cell.name = name;
+          worst_cell.top_views.clear();
+          for (std::size_t m = 0; m < methods.size(); ++m) {
+            std::vector<bool> is_false;
+            for (const VoxelIndex& v : runs[m].final_occupied.voxels) {
+              is_false.push_back(truth.isFalse(v));
+            }
+            worst_cell.top_views.push_back(stereoTopView(
+                std::string(name) + ", " + methods[m].name + " after " + std::to_string(frames) +
+                    " frames",
+                runs[m].final_occupied, is_false, scene, resolution, recording.poses, 1.2));
+          }
+          worst_cell.runs = runs;
+        }
         for (std::size_t m = 0; m < methods.size(); ++m) {
           const StereoRunCurve& run = runs[m];
           const auto& last = run.frames.back();
@@ -142,6 +237,13 @@ int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& ca
         std::fflush(stdout);
       }
     }
+  }
+  if (!images.empty() && !worst_cell.runs.empty()) {
+    cv::Mat stacked;
+    cv::vconcat(worst_cell.top_views, stacked);
+    writeImage(images + "/disparity_matrix_worst_top.png", stacked);
+    writeImage(images + "/disparity_matrix_worst_curves.png",
+               plotRatios(worst_cell, {args.value("parameter_set", "measured"), "table_i"}));
   }
   return 0;
 }

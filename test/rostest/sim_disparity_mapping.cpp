@@ -2,8 +2,8 @@
 // stereo camera in the room scene, against the scene's analytic ground truth; then that malformed
 // disparity images (wrong encoding, a size that does not fit camera_info) are dropped, leave the
 // map as it was, and do not stop the mapper.
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -181,10 +181,11 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
   // circle's centre, seen from it), each with an occupied voxel centre within a voxel diagonal.
   const std::vector<Eigen::Vector3d> seen = surfaceSeenByTheTurn(scene);
   const double coverage = coveredFraction(seen, centres, std::sqrt(3.0) * g_settings.resolution);
-  ROS_INFO("%zu occupied voxels, %zu (%.2f %%) farther than %.2f m from a surface; coverage of "
-           "%zu seen surface samples %.3f",
-           centres.size(), false_occupied, 100.0 * (1.0 - near_fraction), tolerance, seen.size(),
-           coverage);
+  ROS_INFO(
+      "%zu occupied voxels, %zu (%.2f %%) farther than %.2f m from a surface; coverage of "
+      "%zu seen surface samples %.3f",
+      centres.size(), false_occupied, 100.0 * (1.0 - near_fraction), tolerance, seen.size(),
+      coverage);
   std::printf("moving stereo camera: %zu occupied, %zu false-occupied, coverage %.3f\n",
               centres.size(), false_occupied, coverage);
   ASSERT_GE(seen.size(), 500u);

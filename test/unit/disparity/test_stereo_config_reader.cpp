@@ -172,8 +172,8 @@ TEST(StereoConfigReader, ParameterSetThenKeys) {
 }
 
 // The shipped YAML file: every stereo/ key is one the reader knows, Table I's values are its
-// values, and it parses into a valid configuration.
-TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
+// values, its set is the measured one, and it parses into a valid configuration.
+TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
   const std::filesystem::path file =
       std::filesystem::path(OCCUPANCY_FUSION_SOURCE_DIR) / "config/disparity_mapper.yaml";
   std::map<std::string, std::string> values;
@@ -189,6 +189,8 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
                                           "visibility_max",
                                           "unknown_occupancy",
                                           "unknown_neighbour_occupancy",
+                                          "unknown_neighbours",
+                                          "measured_window_px",
                                           "inside_stop_probability",
                                           "max_range",
                                           "bundle_rays",
@@ -203,12 +205,16 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableI) {
     const std::string name = key.substr(kStereoParameterPrefix.size());
     EXPECT_NE(std::find(known.begin(), known.end(), name), known.end()) << key;
   }
-  // The two keys fast_expansion sets are commented out in the file, so the set takes effect.
-  EXPECT_EQ(stereo_keys, known.size() - 2);
+  // The keys the sets change are commented out in the file, so the set takes effect.
+  EXPECT_EQ(stereo_keys, known.size() - 3);
   EXPECT_EQ(values.count("stereo/visibility_min"), 0u);
   EXPECT_EQ(values.count("stereo/prob_hit_invisible"), 0u);
+  EXPECT_EQ(values.count("stereo/unknown_neighbours"), 0u);
+  EXPECT_EQ(values.at("stereo/parameter_set"), "measured");
   const VisibilityStereoConfig from_file = readFrom(values);
-  const VisibilityStereoConfig defaults;
+  const VisibilityStereoConfig defaults;  // Table I
+  EXPECT_EQ(from_file.unknown_neighbours, UnknownNeighbours::kMeasured);
+  EXPECT_EQ(from_file.measured_surface.window_px, MeasuredSurfaceConfig().window_px);
   EXPECT_EQ(from_file.method, defaults.method);
   EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_occupied, defaults.prob_hit_visible_occupied);
   EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_free, defaults.prob_hit_visible_free);
