@@ -16,6 +16,9 @@ void MeasuredSurfaceConfig::validate() const {
   }
   if (!(inlier_px > 0))
     throw std::invalid_argument("MeasuredSurfaceConfig.inlier_px must be positive");
+  if (sample_step_px < 1 || sample_step_px > window_px) {
+    throw std::invalid_argument("MeasuredSurfaceConfig.sample_step_px must be in [1, window_px]");
+  }
   if (grid_step_px < 1 || grid_step_px > window_px) {
     throw std::invalid_argument("MeasuredSurfaceConfig.grid_step_px must be in [1, window_px]");
   }
@@ -87,9 +90,8 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
   columns_ = (width_ - 1) / step_ + 1;
   rows_ = (height_ - 1) / step_ + 1;
   medians_.assign(static_cast<std::size_t>(columns_) * rows_, kNoMedian);
-  // Half the grid step between the wide window's samples: its median is as robust, at a quarter
-  // of the cost.
-  const int sample_step = std::max(1, step_ / 2);
+  // The wide window sampled sparsely: its median needs only more pairs than a patch spoils.
+  const int sample_step = config.sample_step_px;
   const int per_side = 2 * ((config.window_px / 2) / sample_step) + 1;
   const std::size_t needed =
       static_cast<std::size_t>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));

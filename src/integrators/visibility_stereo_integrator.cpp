@@ -871,7 +871,11 @@ MeasuredSurface VisibilityStereoIntegrator::measuredSurface(
       config_.method != StereoIntegrationMethod::kVisibility) {
     return {};
   }
-  return MeasuredSurface(disparity, camera, T_map_camera, config_.measured_surface);
+  // A coarser input (half, quarter) casts rays from every 2nd or 4th pixel: the surface's grid
+  // follows, so that its cost falls with the rays'.
+  MeasuredSurfaceConfig surface = config_.measured_surface;
+  surface.grid_step_px *= pixelStep(config_.disparity.input_resolution);
+  return MeasuredSurface(disparity, camera, T_map_camera, surface);
 }
 
 StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImageView& disparity,

@@ -102,7 +102,7 @@ Run mapWithLiboctomap(const std::vector<StereoFrame>& frames, double resolution)
 cv::Mat stereoTopView(const std::string& title, const OccupiedVoxelSet& occupied,
                       const std::vector<bool>& is_false, const sim::Scene& scene, double resolution,
                       const std::vector<Eigen::Isometry3d>& poses, double camera_height) {
-  constexpr double kMinX = -4.5, kMaxX = 13.0, kMinY = -4.0, kMaxY = 4.0;
+  constexpr double kMinX = -4.5, kMaxX = 17.0, kMinY = -4.0, kMaxY = 4.0;
   constexpr int kPixelsPerMetre = 40;
   const int width = static_cast<int>((kMaxX - kMinX) * kPixelsPerMetre);
   const int height = static_cast<int>((kMaxY - kMinY) * kPixelsPerMetre);

@@ -23,7 +23,8 @@ struct MeasuredSurfaceConfig {
   // a true surface narrower than half the window (a thin pole against a far wall) is read as the
   // surface behind it, which only delays its visibility to a later frame.
   int window_px = 25;
-  int grid_step_px = 4;  // px between the grid's surfaces (the wide window is sampled at half)
+  int grid_step_px = 4;    // px between the grid's surfaces
+  int sample_step_px = 4;  // px between the wide window's samples (7 x 7 of a 25 px window)
   // Fraction of the wide window's symmetric pairs that must be valid. Low: near the range limit
   // or a hole only the pairs along the boundary are valid, and they still give a plane's depth.
   double min_valid = 0.03;
