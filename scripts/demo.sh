@@ -30,12 +30,9 @@ echo "[demo] making the recording: $out/demo.bag"
 
 echo "[demo] mapping it offline"
 # Each sensor kind takes its parameters from its mapper's file, the 2D band from the map server's.
-# The stereo cameras stand still: with unknown neighbours counted as half occluding (the default
-# 0.5) a still view is mapped only a few voxels deeper per frame (docs/disparity_method.md,
-# Fig. 5a); at 0.2 the few frames of the demo reach the surfaces.
 "$bin/offline_mapper" --config "$root/config/depth_mapper.yaml" \
   --config "$root/config/disparity_mapper.yaml" --config "$root/config/laser_mapper.yaml" \
-  --config "$root/config/map_server.yaml" --set stereo/unknown_neighbour_occupancy=0.2 \
+  --config "$root/config/map_server.yaml" \
   --bag "$out/demo.bag" --output-dir "$out" --name demo
 
 echo "[demo] mapping it online in rviz (headless) for a screenshot: $out/demo_rviz.png"

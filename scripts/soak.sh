@@ -42,7 +42,6 @@ cat > "$out/soak.launch" << 'EOF'
     <arg name="image" value="camera/depth/image"/>
     <arg name="front_scan" value="scan"/>
   </include>
-  <param name="disparity_mapper/stereo/unknown_neighbour_occupancy" value="0.2"/>
   <param name="map_server/publish_rate" value="10.0"/>
 </launch>
 EOF
