@@ -29,7 +29,7 @@ void MeasuredSurfaceConfig::validate() const {
 
 namespace {
 
-constexpr float kNoMedian = std::numeric_limits<float>::quiet_NaN();
+constexpr float kNoSurface = std::numeric_limits<float>::quiet_NaN();
 
 bool isValidDisparity(float d) { return std::isfinite(d) && d > 0; }
 
@@ -89,7 +89,7 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
   disparity.validate();
   columns_ = (width_ - 1) / step_ + 1;
   rows_ = (height_ - 1) / step_ + 1;
-  medians_.assign(static_cast<std::size_t>(columns_) * rows_, kNoMedian);
+  cells_.assign(static_cast<std::size_t>(columns_) * rows_, kNoSurface);
   // The wide window sampled sparsely: its median needs only more pairs than a patch spoils.
   const int sample_step = config.sample_step_px;
   const int per_side = 2 * ((config.window_px / 2) / sample_step) + 1;
@@ -102,7 +102,8 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
     for (int j = 0; j < rows_; ++j) {
       for (int i = 0; i < columns_; ++i) {
         const int u = i * step_, v = j * step_;
-        // 1. The wide window's median: robust against patches up to half its area, but on a
+        // 1. The wide window's median: robust while a patch spoils fewer than half its pairs, but
+        // on a
         //    kink of the surface (a corner, an object's edge) biased by the window's size.
         symmetricPairMeans(disparity, u, v, config.window_px / 2, sample_step, 0.0f, 0.0, &means);
         if (means.size() < needed || means.empty()) continue;
@@ -119,7 +120,7 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
             surface = static_cast<float>(sum / means.size());
           }
         }
-        medians_[static_cast<std::size_t>(j) * columns_ + i] = surface;
+        cells_[static_cast<std::size_t>(j) * columns_ + i] = surface;
       }
     }
   }
@@ -132,8 +133,8 @@ double MeasuredSurface::disparityAt(double u, double v) const {
   const int j0 = std::max(0, std::min(static_cast<int>(gv), rows_ - 2));
   const int i1 = std::min(i0 + 1, columns_ - 1), j1 = std::min(j0 + 1, rows_ - 1);
   const double fu = i1 > i0 ? gu - i0 : 0.0, fv = j1 > j0 ? gv - j0 : 0.0;
-  const double d00 = medianAt(i0, j0), d10 = medianAt(i1, j0);
-  const double d01 = medianAt(i0, j1), d11 = medianAt(i1, j1);
+  const double d00 = cellAt(i0, j0), d10 = cellAt(i1, j0);
+  const double d01 = cellAt(i0, j1), d11 = cellAt(i1, j1);
   const int missing = std::isnan(d00) + std::isnan(d10) + std::isnan(d01) + std::isnan(d11);
   // Four corners: bilinear. Three: the plane through them, so that next to invalid pixels (the
   // range limit, a hole) a slanted surface is not read as its nearer corner's depth. Fewer: the

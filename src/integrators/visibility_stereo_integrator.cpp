@@ -305,57 +305,70 @@ class MapSnapshot {
   const VoxelBlock* last_ = nullptr;
 };
 
-// How Eq. 1 reads a never-observed neighbour (the paper's OctoMap has no node there; see
-// UnknownNeighbours in the header).
-struct NeighbourReading {
-  bool ignore_unknown;     // kKnownOnly: left out of the minimum
-  float unknown_log_odds;  // kPrior: logit(unknown_neighbour_occupancy)
-  // kMeasured: the frame's measured surface (null: read as kPrior), Eq. 7's lambda and Phi.
-  const MeasuredSurface* surface;
-  double lambda;
+// unknown_neighbours: measured: the frame's measured surface read at voxels. A voxel's depth z
+// (its centre's, along the optical axis) against the surface depth z_s on its line of sight, with
+// Eq. 7's sigma_z of z_s kept within [sigma_min, sigma_max].
+struct FrameMeasurement {
+  const MeasuredSurface* surface;  // null: no measurement (every read is false)
+  double lambda;                   // Eq. 7: sigma_z = lambda z^2
   const NormalCdfTable* phi;
   double resolution;
+  double sigma_min, sigma_max;  // m
+  double face_offset;           // m, from a voxel's centre to its front and back along the depth
 
-  double sigma_min, sigma_max;  // m, bounds of the measurement's sigma_z
+  struct Depth {
+    double z, z_surface, sigma;
+    // P(the measured surface lies in front of depth z + offset).
+    double surfaceInFront(double offset, const NormalCdfTable& cdf) const {
+      return cdf((z + offset - z_surface) / sigma);
+    }
+  };
+  // False where the image does not say (outside it, behind the camera, no surface near).
+  bool depthOf(const VoxelIndex& voxel, Depth* depth) const {
+    if (surface == nullptr) return false;
+    const Eigen::Vector3d center = (voxel.cast<double>().array() + 0.5) * resolution;
+    if (!surface->depthAt(center, &depth->z, &depth->z_surface)) return false;
+    depth->sigma = std::clamp(lambda * depth->z_surface * depth->z_surface, sigma_min, sigma_max);
+    return true;
+  }
+  // P(O) of a voxel by the measurement: the surface lies in front of its centre.
+  bool occupancy(const VoxelIndex& voxel, double* p) const {
+    Depth depth;
+    if (!depthOf(voxel, &depth)) return false;
+    *p = depth.surfaceInFront(0.0, *phi);
+    return true;
+  }
+  // Visible while the surface lies behind its front; 1 where the image does not say.
+  double visibility(const VoxelIndex& voxel) const {
+    Depth depth;
+    return depthOf(voxel, &depth) ? 1.0 - depth.surfaceInFront(-face_offset, *phi) : 1.0;
+  }
+};
+
+// How Eq. 1 reads a neighbour (the paper's OctoMap has no node for a never-observed one; see
+// UnknownNeighbours in the header).
+struct NeighbourReading {
+  bool ignore_unknown;                  // kKnownOnly: left out of the minimum
+  float unknown_log_odds;               // kPrior: logit(unknown_neighbour_occupancy)
+  const FrameMeasurement* measurement;  // kMeasured
   bool fuse_known;  // the measurement's evidence added to known neighbours' log-odds too
   float min_log_odds, max_log_odds;  // the map's clamping bounds
 
-  // The frame's measurement at a voxel: logit P(the measured surface on its line of sight lies
-  // in front of its centre), with Eq. 7's sigma_z, clamped to the map's bounds; false where the
-  // image does not say.
-  bool measuredLogOdds(const VoxelIndex& voxel, float* log_odds) const {
+  // The neighbour's log-odds: the map's (NaN: never observed) with the measurement's.
+  float read(const VoxelIndex& neighbour, float map_log_odds) const {
+    const bool known = !std::isnan(map_log_odds);
     double p = 0;
-    if (!measuredProbability(voxel, 0.0, &p)) return false;
+    if ((known && !fuse_known) || !measurement->occupancy(neighbour, &p)) {
+      return known ? map_log_odds : unknown_log_odds;
+    }
     // Not clamped below: space the frame measures free, P(O) = 0, passes the visibility on
     // unchanged, as Eq. 3 does for q_max and above.
-    *log_odds = std::min(logit(p), max_log_odds);
-    return true;
-  }
-  // P(the measured surface lies in front of depth z + depth_offset), z the voxel centre's depth.
-  bool measuredProbability(const VoxelIndex& voxel, double depth_offset, double* p) const {
-    if (surface == nullptr) return false;
-    const Eigen::Vector3d center = (voxel.cast<double>().array() + 0.5) * resolution;
-    double z = 0, z_surface = 0;
-    if (!surface->depthAt(center, &z, &z_surface)) return false;
-    const double sigma_z = lambda * z_surface * z_surface;
-    const double sigma = std::clamp(sigma_z, sigma_min, sigma_max);
-    *p = (*phi)((z + depth_offset - z_surface) / sigma);
-    return true;
-  }
-  double face_offset;  // m, from a voxel's centre to its front and back along the depth
-  // A neighbour's log-odds for Eq. 1: the map's (NaN: never observed) with the measurement's.
-  float read(const VoxelIndex& neighbour, float map_log_odds) const {
-    float measured = 0;
-    if (std::isnan(map_log_odds)) {
-      return measuredLogOdds(neighbour, &measured) ? measured : unknown_log_odds;
-    }
-    if (fuse_known && measuredLogOdds(neighbour, &measured)) {
-      // The measurement's free-space evidence weighs at most as one clamped free voxel, so that a
-      // surface the map knows well still occludes where the frame's median misses it (an object
-      // smaller than the window, seen through a patch shifted away from the camera).
-      return std::min(map_log_odds + std::max(measured, min_log_odds), max_log_odds);
-    }
-    return map_log_odds;
+    const float measured = std::min(logit(p), max_log_odds);
+    if (!known) return measured;
+    // The measurement's free-space evidence weighs at most as one clamped free voxel, so that a
+    // surface the map knows well still occludes where the frame's median misses it (an object
+    // smaller than the window, seen through a patch shifted away from the camera).
+    return std::min(map_log_odds + std::max(measured, min_log_odds), max_log_odds);
   }
 };
 
@@ -406,6 +419,7 @@ struct FrameContext {
   VoxelIndex origin_voxel;
   double resolution;
   NeighbourReading neighbours;
+  const FrameMeasurement& measurement;
   bool measured_visibility;  // a voxel's visibility is at most the measurement's
 };
 
@@ -450,18 +464,8 @@ class RayCaster {
               : 0.0f;
       const float measured_visibility =
           need_occlusion && frame_.measured_visibility
-              ? updates_->measuredVisibility(
-                    entry,
-                    [&] {
-                      // Visible while the surface lies behind its
-                      // front.
-                      double p = 0;
-                      const auto& n = frame_.neighbours;
-                      if (!n.measuredProbability(index, -n.face_offset, &p)) {
-                        return 1.0;
-                      }
-                      return 1.0 - p;
-                    })
+              ? updates_->measuredVisibility(entry,
+                                             [&] { return frame_.measurement.visibility(index); })
               : 1.0f;
       current_.push_back({index, entry, occlusion, measured_visibility});
     }
@@ -655,8 +659,8 @@ std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3
 
 // measured_prior: the prior of Eq. 4-6 of each never-observed voxel from the frame's
 // measurement, where the measurement says less than unknown_occupancy. measured_inside: P(I_v)
-// of Eq. 8 at most the measurement's.
-void applyMeasurement(const VoxelMap& map, const NeighbourReading& reading,
+// of Eq. 8 at most P(the measured surface lies in front of the voxel's back).
+void applyMeasurement(const VoxelMap& map, const FrameMeasurement& measurement,
                       const VisibilityStereoConfig& config, int threads,
                       std::vector<StereoVoxelUpdate>* updates) {
   const long count = static_cast<long>(updates->size());
@@ -666,14 +670,14 @@ void applyMeasurement(const VoxelMap& map, const NeighbourReading& reading,
 #pragma omp for schedule(static)
     for (long i = 0; i < count; ++i) {
       StereoVoxelUpdate& update = (*updates)[i];
-      double p_measured = 0, p_back = 0;
-      if (!reading.measuredProbability(update.index, 0.0, &p_measured)) continue;
+      FrameMeasurement::Depth depth;
+      if (!measurement.depthOf(update.index, &depth)) continue;
       if (config.measured_inside) {
-        // Inside where the surface lies in front of the voxel's back.
-        reading.measuredProbability(update.index, reading.face_offset, &p_back);
+        const double p_back = depth.surfaceInFront(measurement.face_offset, *measurement.phi);
         update.p_inside = static_cast<float>(std::min<double>(update.p_inside, p_back));
       }
       if (config.measured_prior && std::isnan(snapshot.logOdds(update.index))) {
+        const double p_measured = depth.surfaceInFront(0.0, *measurement.phi);
         update.prior = static_cast<float>(std::min(config.unknown_occupancy, p_measured));
       }
     }
@@ -708,26 +712,23 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   // logit(0) = -inf and logit(1) = +inf order correctly in Eq. 1's minimum.
   const bool measured = config_.unknown_neighbours == UnknownNeighbours::kMeasured &&
                         surface != nullptr && !surface->empty();
-  const NeighbourReading neighbours{
-      config_.unknown_neighbours == UnknownNeighbours::kKnownOnly,
-      logit(config_.unknown_neighbour_occupancy),
+  const FrameMeasurement measurement{
       measured ? surface : nullptr,
       measured ? config_.disparity.disparity_sigma_px / surface->focalBaseline() : 0.0,
       &phi_,
       resolution,
       config_.measured_sigma_min_voxels * resolution,
       config_.measured_sigma_max_voxels * resolution,
-      config_.measured_fuse_known,
-      map.minLogOdds(),
-      map.maxLogOdds(),
       0.5 * resolution};
-  const FrameContext frame{config_,
-                           phi_,
-                           sensor_origin,
-                           map.indexOf(sensor_origin),
-                           resolution,
-                           neighbours,
-                           measured && config_.measured_visibility};
+  const NeighbourReading neighbours{config_.unknown_neighbours == UnknownNeighbours::kKnownOnly,
+                                    logit(config_.unknown_neighbour_occupancy),
+                                    &measurement,
+                                    config_.measured_fuse_known,
+                                    map.minLogOdds(),
+                                    map.maxLogOdds()};
+  const FrameContext frame{
+      config_,    phi_,       sensor_origin, map.indexOf(sensor_origin),
+      resolution, neighbours, measurement,   measured && config_.measured_visibility};
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
   std::size_t skipped = 0;
   std::vector<std::uint32_t> bundles;
@@ -780,7 +781,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
                                 [](const StereoVoxelUpdate& u) { return !(u.visibility > 0); }),
                  updates->end());
   if (measured && (config_.measured_prior || config_.measured_inside)) {
-    applyMeasurement(map, neighbours, config_, threads, updates);
+    applyMeasurement(map, measurement, config_, threads, updates);
   }
   stats.skipped_points = skipped;
   stats.rays = config_.bundle_rays ? bundles.size() : stats.points - skipped;

@@ -4,11 +4,12 @@
 //
 // A matcher's wrong disparities come in patches that stick to image positions: a patch shifted
 // towards the camera puts a phantom surface into free space, one shifted away makes a hole in a
-// true surface through which the space behind it looks visible. The median disparity over a
-// window several times a patch's size ignores both while the patch covers less than half the
-// window, and on a plane (whose disparity is linear in u and v) it is the plane's own disparity
-// at the window's centre. It is sampled on a grid and read bilinearly in disparity, where a plane
-// stays linear.
+// true surface through which the space behind it looks visible. On a grid, the median over a
+// wide window of the means of point-symmetric pixel pairs ignores both while a patch spoils fewer
+// than half the pairs, and on a plane (whose disparity is linear in u and v) every pair mean is
+// the plane's disparity at the window's centre; the pairs of a small window within inlier_px of
+// that median then give the surface, with the bias at a corner or step of the small window only.
+// The grid is read bilinearly in disparity, where a plane stays linear.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -45,26 +46,22 @@ class MeasuredSurface {
   MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
                   const Eigen::Isometry3d& T_map_camera, const MeasuredSurfaceConfig& config = {});
 
-  bool empty() const { return medians_.empty(); }
+  bool empty() const { return cells_.empty(); }
   // For a point in the map frame: its depth z along the optical axis and the depth of the
   // measured surface on its line of sight, z_surface; false where the image does not say
-  // (behind the camera, outside the image, no median near the pixel).
+  // (behind the camera, outside the image, no grid surface near the pixel).
   bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface) const;
-  // The median disparity at grid cell (i, j) (pixel (i, j) * grid_step_px), NaN where invalid.
-  float medianAt(int i, int j) const {
-    return medians_[static_cast<std::size_t>(j) * columns_ + i];
-  }
   double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
-  int columns() const { return columns_; }
-  int rows() const { return rows_; }
 
  private:
-  double disparityAt(double u, double v) const;  // bilinear over valid grid medians, or NaN
+  // The surface's disparity at grid cell (i, j) (pixel (i, j) * grid_step_px), NaN where none.
+  float cellAt(int i, int j) const { return cells_[static_cast<std::size_t>(j) * columns_ + i]; }
+  double disparityAt(double u, double v) const;  // interpolated over the grid, or NaN
 
   Eigen::Isometry3d T_camera_map_ = Eigen::Isometry3d::Identity();
   double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0, focal_baseline_ = 0;
   int width_ = 0, height_ = 0, step_ = 1, columns_ = 0, rows_ = 0;
-  std::vector<float> medians_;  // row-major, columns_ x rows_
+  std::vector<float> cells_;  // row-major, columns_ x rows_
 };
 
 }  // namespace occupancy_fusion
