@@ -22,6 +22,11 @@ void MeasuredSurfaceConfig::validate() const {
   if (grid_step_px < 1 || grid_step_px > window_px) {
     throw std::invalid_argument("MeasuredSurfaceConfig.grid_step_px must be in [1, window_px]");
   }
+  if (grid_step_px % sample_step_px != 0) {
+    throw std::invalid_argument(
+        "MeasuredSurfaceConfig.grid_step_px must be a multiple of sample_step_px");
+  }
+  if (!(step_px >= 0)) throw std::invalid_argument("MeasuredSurfaceConfig.step_px must be >= 0");
   if (!(min_valid > 0 && min_valid <= 1)) {
     throw std::invalid_argument("MeasuredSurfaceConfig.min_valid must be in (0, 1]");
   }
@@ -30,6 +35,7 @@ void MeasuredSurfaceConfig::validate() const {
 namespace {
 
 constexpr float kNoSurface = std::numeric_limits<float>::quiet_NaN();
+constexpr int kMinLocalPairs = 4;  // fewer inliers in the small window: the wide median stands
 
 bool isValidDisparity(float d) { return std::isfinite(d) && d > 0; }
 
@@ -37,38 +43,61 @@ bool isValidDisparity(float d) { return std::isfinite(d) && d > 0; }
 
 namespace {
 
-// The means of the point-symmetric sample pairs about (u, v) within `reach` px, `step` px apart,
-// and the centre sample; a pair only where both samples are accepted (valid and within `limit`
-// of `reference`, when limit > 0). On a plane, whose disparity is linear in u and v, every pair
-// mean is the centre's disparity, whatever the slope and also where invalid pixels (the range
-// limit, an image border, a matcher's holes) lie on one side only.
-void symmetricPairMeans(const DisparityImageView& image, int u, int v, int reach, int step,
-                        float reference, double limit, std::vector<float>* means) {
-  auto accepted = [&](int x, int y, float* d) {
-    if (x < 0 || x >= image.width || y < 0 || y >= image.height) return false;
-    *d = image.at(x, y);
-    return isValidDisparity(*d) && (limit <= 0 || std::abs(*d - reference) <= limit);
-  };
-  means->clear();
-  reach = (reach / step) * step;
-  for (int dv = -reach; dv <= 0; dv += step) {
-    for (int du = -reach; du <= reach; du += step) {
-      if (dv == 0 && du > 0) break;
-      float first = 0, second = 0;
-      if (!accepted(u + du, v + dv, &first)) continue;
-      if (dv == 0 && du == 0) {
-        means->push_back(first);
-      } else if (accepted(u - du, v - dv, &second)) {
-        means->push_back(0.5f * (first + second));
-      }
+// The mean of the point-symmetric pixel pairs about (u, v) within `reach` px whose pixels are
+// both valid and within `limit` of `reference`, and of the centre pixel if it is; false with
+// fewer than `needed`. On a plane, whose disparity is linear in u and v, every pair mean is the
+// centre's disparity, whatever the slope and also where invalid pixels (the range limit, an
+// image border, a matcher's holes) lie on one side only.
+bool inlierPairMean(const DisparityImageView& image, int u, int v, int reach, float reference,
+                    double limit, int needed, float* mean) {
+  auto accepted = [&](float d) { return isValidDisparity(d) && std::abs(d - reference) <= limit; };
+  // A pair needs both pixels in the image.
+  const int reach_u = std::min({reach, u, image.width - 1 - u});
+  const int reach_v = std::min({reach, v, image.height - 1 - v});
+  double sum = 0;
+  int count = 0;
+  for (int dv = -reach_v; dv <= 0; ++dv) {
+    const int last = dv == 0 ? -1 : reach_u;
+    for (int du = -reach_u; du <= last; ++du) {
+      const float first = image.at(u + du, v + dv), second = image.at(u - du, v - dv);
+      if (!accepted(first) || !accepted(second)) continue;
+      sum += 0.5 * (first + second);
+      ++count;
     }
   }
+  const float centre = image.at(u, v);
+  if (accepted(centre)) {
+    sum += centre;
+    ++count;
+  }
+  if (count < needed) return false;
+  *mean = static_cast<float>(sum / count);
+  return true;
 }
 
-float medianOf(std::vector<float>* values) {
-  auto middle = values->begin() + static_cast<std::ptrdiff_t>(values->size() / 2);
-  std::nth_element(values->begin(), middle, values->end());
-  return *middle;
+// The upper median of count values (values must have room for kRanked). Up to kRanked values (a
+// window's few tens) by their ranks, every pair compared in loops of fixed length that the
+// compiler vectorises, without a data-dependent branch: std::nth_element's introselect
+// mispredicts its branches on noise and took 4x as long for the default 25 values.
+constexpr std::size_t kRanked = 32;
+float medianOf(float* values, std::size_t count) {
+  const std::size_t middle = count / 2;
+  if (count > kRanked) {
+    std::nth_element(values, values + middle, values + count);
+    return values[middle];
+  }
+  // Padding with +inf leaves every real value's rank as it is.
+  std::fill(values + count, values + kRanked, std::numeric_limits<float>::infinity());
+  // rank(i) = #{j : v_j < v_i} + #{j < i : v_j = v_i}: a permutation of 0 .. count - 1.
+  float median = values[0];
+  for (std::size_t i = 0; i < count; ++i) {
+    const float value = values[i];
+    int rank = 0;
+    for (std::size_t j = 0; j < kRanked; ++j) rank += static_cast<int>(values[j] < value);
+    for (std::size_t j = 0; j < i; ++j) rank += static_cast<int>(values[j] == value);
+    if (static_cast<std::size_t>(rank) == middle) median = value;
+  }
+  return median;
 }
 
 }  // namespace
@@ -90,38 +119,153 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
   columns_ = (width_ - 1) / step_ + 1;
   rows_ = (height_ - 1) / step_ + 1;
   cells_.assign(static_cast<std::size_t>(columns_) * rows_, kNoSurface);
-  // The wide window sampled sparsely: its median needs only more pairs than a patch spoils.
-  const int sample_step = config.sample_step_px;
-  const int per_side = 2 * ((config.window_px / 2) / sample_step) + 1;
+  measureNodes(disparity, config);
+  extendByOneNode();
+  findSteps(config.step_px);
+}
+
+namespace {
+
+// The pixels every sample_step px, with `pad` NaN samples around, so that a window reaching past
+// the image needs no bounds checks: the wide windows of all grid nodes read this one lattice.
+class SampleLattice {
+ public:
+  SampleLattice(const DisparityImageView& image, int step, int pad)
+      : step_(step), pad_(pad), columns_((image.width - 1) / step + 1 + 2 * pad) {
+    const int rows = (image.height - 1) / step + 1 + 2 * pad;
+    samples_.assign(static_cast<std::size_t>(columns_) * rows, kNoSurface);
+    for (int v = 0; v < image.height; v += step) {
+      for (int u = 0; u < image.width; u += step) {
+        const float d = image.at(u, v);
+        if (isValidDisparity(d)) samples_[index(u / step, v / step)] = d;
+      }
+    }
+  }
+  // The means of the point-symmetric sample pairs about pixel (u, v) (on the lattice) within
+  // `reach` samples, and the centre sample, a pair only where both are valid, written to `means`
+  // (room for 2 reach (reach + 1) + 1); returns their count.
+  std::size_t pairMeans(int u, int v, int reach, float* means) const {
+    std::size_t count = 0;
+    const int i = u / step_, j = v / step_;
+    for (int dj = -reach; dj <= 0; ++dj) {
+      const float* row = &samples_[index(i, j + dj)];
+      const float* mirrored = &samples_[index(i, j - dj)];
+      const int last = dj == 0 ? -1 : reach;
+      for (int di = -reach; di <= last; ++di) {
+        const float mean = 0.5f * (row[di] + mirrored[-di]);
+        means[count] = mean;
+        count += std::isnan(mean) ? 0 : 1;  // NaN where either sample is
+      }
+    }
+    const float centre = samples_[index(i, j)];
+    means[count] = centre;
+    return count + (std::isnan(centre) ? 0 : 1);
+  }
+
+ private:
+  std::size_t index(int i, int j) const {
+    return static_cast<std::size_t>(j + pad_) * columns_ + (i + pad_);
+  }
+  int step_, pad_, columns_;
+  std::vector<float> samples_;
+};
+
+}  // namespace
+
+void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
+                                   const MeasuredSurfaceConfig& config) {
+  const int reach = (config.window_px / 2) / config.sample_step_px;
+  const SampleLattice lattice(disparity, config.sample_step_px, reach);
+  const int per_side = 2 * reach + 1;
   const std::size_t needed =
       static_cast<std::size_t>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
 #pragma omp parallel
   {
-    std::vector<float> means;
+    std::vector<float> wide(std::max<std::size_t>(kRanked, 2 * reach * (reach + 1) + 1));
 #pragma omp for schedule(static)
     for (int j = 0; j < rows_; ++j) {
       for (int i = 0; i < columns_; ++i) {
         const int u = i * step_, v = j * step_;
         // 1. The wide window's median: robust while a patch spoils fewer than half its pairs, but
-        // on a
-        //    kink of the surface (a corner, an object's edge) biased by the window's size.
-        symmetricPairMeans(disparity, u, v, config.window_px / 2, sample_step, 0.0f, 0.0, &means);
-        if (means.size() < needed || means.empty()) continue;
-        const float robust = medianOf(&means);
+        //    on a kink of the surface (a corner, an object's edge) biased by the window's size.
+        const std::size_t count = lattice.pairMeans(u, v, reach, wide.data());
+        if (count < needed || count == 0) continue;
+        const float robust = medianOf(wide.data(), count);
         // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
         //    left out, and a kink's bias that of the small window.
         float surface = robust;
         if (config.local_window_px > 0) {
-          symmetricPairMeans(disparity, u, v, config.local_window_px / 2, 1, robust,
-                             config.inlier_px, &means);
-          if (means.size() >= 4) {
-            double sum = 0;
-            for (float d : means) sum += d;
-            surface = static_cast<float>(sum / means.size());
-          }
+          inlierPairMean(disparity, u, v, config.local_window_px / 2, robust, config.inlier_px,
+                         kMinLocalPairs, &surface);
         }
-        cells_[static_cast<std::size_t>(j) * columns_ + i] = surface;
+        cells_[linear(i, j)] = surface;
       }
+    }
+  }
+}
+
+void MeasuredSurface::extendByOneNode() {
+  // A node without a surface next to ones that have (the range limit, the edge of a hole, the
+  // image's border): the mean of the linear extrapolations along its row and column from the two
+  // nodes on each side that have, exact on a plane. Without it the pixels between the last
+  // surface and the range limit read no surface (two of their cell's corners missing), and their
+  // rays meet the paper's prior all along their line of sight: the far end of a corridor was
+  // mapped frames late.
+  constexpr int kDirections[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  std::vector<float> extended = cells_;
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < rows_; ++j) {
+    for (int i = 0; i < columns_; ++i) {
+      if (!std::isnan(cellAt(i, j))) continue;
+      double sum = 0;
+      int count = 0;
+      for (const auto& [di, dj] : kDirections) {
+        const int i2 = i + 2 * di, j2 = j + 2 * dj;
+        if (i2 < 0 || i2 >= columns_ || j2 < 0 || j2 >= rows_) continue;
+        const float near = cellAt(i + di, j + dj), far = cellAt(i2, j2);
+        if (std::isnan(near) || std::isnan(far)) continue;
+        sum += 2.0 * near - far;
+        ++count;
+      }
+      if (count > 0 && sum > 0) extended[linear(i, j)] = static_cast<float>(sum / count);
+    }
+  }
+  cells_ = std::move(extended);
+}
+
+bool MeasuredSurface::isStep(int i, int j, int di, int dj, double step_px) const {
+  // The edge from node (i, j) to (i + di, j + dj) against the edges before and after it.
+  const double first = cellAt(i, j), second = cellAt(i + di, j + dj);
+  const double change = second - first;
+  bool compared = false;
+  if (i - di >= 0 && j - dj >= 0) {
+    const double before = cellAt(i - di, j - dj);
+    if (!std::isnan(before)) {
+      if (!(std::abs(change - (first - before)) > step_px)) return false;
+      compared = true;
+    }
+  }
+  if (i + 2 * di < columns_ && j + 2 * dj < rows_) {
+    const double after = cellAt(i + 2 * di, j + 2 * dj);
+    if (!std::isnan(after)) {
+      if (!(std::abs(change - (after - second)) > step_px)) return false;
+      compared = true;
+    }
+  }
+  return compared;
+}
+
+void MeasuredSurface::findSteps(double step_px) {
+  steps_.assign(cells_.size(), 0);
+  if (!(step_px > 0)) return;
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < rows_ - 1; ++j) {
+    for (int i = 0; i < columns_ - 1; ++i) {
+      const bool corners = !std::isnan(cellAt(i, j)) && !std::isnan(cellAt(i + 1, j)) &&
+                           !std::isnan(cellAt(i, j + 1)) && !std::isnan(cellAt(i + 1, j + 1));
+      steps_[linear(i, j)] =
+          corners && (isStep(i, j, 1, 0, step_px) || isStep(i, j + 1, 1, 0, step_px) ||
+                      isStep(i, j, 0, 1, step_px) || isStep(i + 1, j, 0, 1, step_px));
     }
   }
 }
@@ -140,6 +284,7 @@ double MeasuredSurface::disparityAt(double u, double v) const {
   // range limit, a hole) a slanted surface is not read as its nearer corner's depth. Fewer: the
   // image does not say.
   if (missing == 0) {
+    if (steps_[linear(i0, j0)]) return fv < 0.5 ? (fu < 0.5 ? d00 : d10) : (fu < 0.5 ? d01 : d11);
     return (1 - fv) * ((1 - fu) * d00 + fu * d10) + fv * ((1 - fu) * d01 + fu * d11);
   }
   if (missing > 1) return std::numeric_limits<double>::quiet_NaN();

@@ -300,6 +300,7 @@ const std::vector<Workload>& workloads() {
         "inputs",
         "curves",
         "measured_window",
+        "measured_step_px",
         "measured_sigma_max_voxels",
         "measured_fuse_known",
         "measured_prior",

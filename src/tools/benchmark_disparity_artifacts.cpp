@@ -271,6 +271,8 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
   config.prob_hit_invisible = args.doubleValue("p_hit_invisible", config.prob_hit_invisible);
   config.measured_surface.window_px =
       args.intValue("measured_window", config.measured_surface.window_px);
+  config.measured_surface.step_px =
+      args.doubleValue("measured_step_px", config.measured_surface.step_px);
   config.measured_sigma_max_voxels =
       args.doubleValue("measured_sigma_max_voxels", config.measured_sigma_max_voxels);
   for (const auto& [option, field] :

@@ -38,9 +38,10 @@ std::vector<float> planeImage(const Plane& plane) {
   return image;
 }
 
-MeasuredSurface surfaceOf(const std::vector<float>& image) {
+MeasuredSurface surfaceOf(const std::vector<float>& image,
+                          const MeasuredSurfaceConfig& config = {}) {
   const DisparityImageView view{kWidth, kHeight, image.data(), 0};
-  return MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity());
+  return MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity(), config);
 }
 
 // The point at depth z on pixel (u, v)'s line of sight, in the camera (= map) frame.
@@ -57,13 +58,18 @@ double surfaceDepth(const MeasuredSurface& surface, double u, double v) {
 
 TEST(MeasuredSurface, GivesAPlanesDepthAtEveryPixel) {
   const Plane plane;
-  const MeasuredSurface surface = surfaceOf(planeImage(plane));
-  // Up to the image's borders, its last column and row included (not its very corners, where
-  // no window has enough symmetric pairs).
-  for (double v : {2.0, 13.3, 59.5, 101.7, 119.0}) {
-    for (double u : {2.0, 7.2, 79.5, 120.9, 159.0}) {
-      EXPECT_NEAR(surfaceDepth(surface, u, v), plane.depth(u, v), 1e-4 * plane.depth(u, v))
-          << "pixel " << u << ", " << v;
+  // The default window (25 values to a median, ranked) and a wider one (61, by selection).
+  MeasuredSurfaceConfig wide;
+  wide.window_px = 41;
+  for (const MeasuredSurfaceConfig& config : {MeasuredSurfaceConfig(), wide}) {
+    const MeasuredSurface surface = surfaceOf(planeImage(plane), config);
+    // Up to the image's borders, its last column and row included (not its very corners, where
+    // no window has enough symmetric pairs).
+    for (double v : {2.0, 13.3, 59.5, 101.7, 119.0}) {
+      for (double u : {2.0, 7.2, 79.5, 120.9, 159.0}) {
+        EXPECT_NEAR(surfaceDepth(surface, u, v), plane.depth(u, v), 1e-4 * plane.depth(u, v))
+            << "pixel " << u << ", " << v << ", window " << config.window_px;
+      }
     }
   }
 }
@@ -90,6 +96,65 @@ TEST(MeasuredSurface, KeepsAPlanesDepthNextToInvalidPixels) {
     ++checked;
   }
   EXPECT_GE(checked, 8);
+}
+
+TEST(MeasuredSurface, ReachesTheRangeLimit) {
+  // Nothing measured from column 62 on (a range limit between grid nodes 60 and 64, at the default
+  // 4 px): node 64 has no symmetric pair, and the pixels from 60 to 62 read their cell's two
+  // valid corners and the plane extrapolated one node on, not nothing.
+  const Plane plane;
+  std::vector<float> image = planeImage(plane);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 62; u < kWidth; ++u) image[static_cast<std::size_t>(v) * kWidth + u] = NAN;
+  }
+  const MeasuredSurface surface = surfaceOf(image);
+  for (double v : {10.0, 37.5, 59.5, 90.2}) {
+    for (double u : {60.5, 61.0, 61.9}) {
+      EXPECT_NEAR(surfaceDepth(surface, u, v), plane.depth(u, v), 1e-3 * plane.depth(u, v))
+          << "pixel " << u << ", " << v;
+    }
+  }
+  // Two nodes past the limit the image does not say.
+  EXPECT_TRUE(std::isnan(surfaceDepth(surface, 69.0, 59.5)));
+}
+
+// A fronto-parallel plane at 3 m left of column `edge` and one at 3.5 m from it on (a doorway's
+// jamb against the wall behind it: 0.71 px of disparity, within the small window's inlier_px).
+std::vector<float> stepImage(int edge) {
+  std::vector<float> image(static_cast<std::size_t>(kWidth) * kHeight);
+  const double focal_baseline = kCamera.fx * kCamera.baseline;
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      image[static_cast<std::size_t>(v) * kWidth + u] =
+          static_cast<float>(focal_baseline / (u < edge ? 3.0 : 3.5));
+    }
+  }
+  return image;
+}
+
+TEST(MeasuredSurface, DoesNotInterpolateAcrossAStep) {
+  // The outline midway between grid nodes 80 and 84. Across it every pixel reads one of the two
+  // surfaces (node 80's small window reaches across it: 3 % off), none a surface in between that
+  // no pixel sees; interpolating across the step, pixels 80 to 84 do.
+  const std::vector<float> image = stepImage(82);
+  auto depthsBetween = [&](const MeasuredSurface& surface) {
+    int between = 0;
+    for (double u = 60; u <= 100; u += 0.5) {
+      const double z = surfaceDepth(surface, u, 59.5);
+      EXPECT_FALSE(std::isnan(z)) << "pixel " << u;
+      if (z > 3.0 * 1.05 && z < 3.5 / 1.05) ++between;
+    }
+    return between;
+  };
+  const MeasuredSurface surface = surfaceOf(image);
+  EXPECT_EQ(depthsBetween(surface), 0);
+  MeasuredSurfaceConfig interpolating;
+  interpolating.step_px = 0;
+  EXPECT_GE(depthsBetween(surfaceOf(image, interpolating)), 4);
+  // The outline where it is, each side's own depth.
+  for (double u : {60.0, 70.0, 75.0}) EXPECT_NEAR(surfaceDepth(surface, u, 30.0), 3.0, 1e-4);
+  for (double u : {78.0, 81.5}) EXPECT_NEAR(surfaceDepth(surface, u, 30.0), 3.0, 0.1);
+  for (double u : {82.0, 84.0, 99.0}) EXPECT_NEAR(surfaceDepth(surface, u, 30.0), 3.5, 1e-4);
 }
 
 TEST(MeasuredSurface, IgnoresPatchesOfWrongDisparity) {
@@ -143,6 +208,8 @@ TEST(MeasuredSurface, RejectsBadConfigurations) {
   rejects([](MeasuredSurfaceConfig& c) { c.min_valid = 0.0; });
   rejects([](MeasuredSurfaceConfig& c) { c.local_window_px = 99; });
   rejects([](MeasuredSurfaceConfig& c) { c.inlier_px = 0.0; });
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_step_px = 6; });  // not a multiple of 4
+  rejects([](MeasuredSurfaceConfig& c) { c.step_px = -0.1; });
 }
 
 }  // namespace

@@ -191,6 +191,7 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
                                           "unknown_neighbour_occupancy",
                                           "unknown_neighbours",
                                           "measured_window_px",
+                                          "measured_step_px",
                                           "inside_stop_probability",
                                           "max_range",
                                           "bundle_rays",
