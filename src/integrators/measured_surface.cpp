@@ -78,7 +78,8 @@ bool inlierPairMean(const DisparityImageView& image, int u, int v, int reach, fl
 // The upper median of count values (values must have room for kRanked). Up to kRanked values (a
 // window's few tens) by their ranks, every pair compared in loops of fixed length that the
 // compiler vectorises, without a data-dependent branch: std::nth_element's introselect
-// mispredicts its branches on noise and took 4x as long for the default 25 values.
+// mispredicts its branches on noise: the wide windows of a 741 x 497 frame took 7.1 ms on one
+// thread with it, 2.9 ms by rank.
 constexpr std::size_t kRanked = 32;
 float medianOf(float* values, std::size_t count) {
   const std::size_t middle = count / 2;
@@ -189,7 +190,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
         // 1. The wide window's median: robust while a patch spoils fewer than half its pairs, but
         //    on a kink of the surface (a corner, an object's edge) biased by the window's size.
         const std::size_t count = lattice.pairMeans(u, v, reach, wide.data());
-        if (count < needed || count == 0) continue;
+        if (count < needed) continue;  // needed >= 1: min_valid > 0
         const float robust = medianOf(wide.data(), count);
         // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
         //    left out, and a kink's bias that of the small window.
