@@ -4,13 +4,14 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
+
+#include "occupancy_fusion/integrators/median_network.h"
 
 namespace occupancy_fusion {
 
 void MeasuredSurfaceConfig::validate() const {
-  if (window_px < 1 || window_px > 1001) {
-    throw std::invalid_argument("MeasuredSurfaceConfig.window_px must be in [1, 1001]");
-  }
+  if (window_px < 1) throw std::invalid_argument("MeasuredSurfaceConfig.window_px must be >= 1");
   if (local_window_px < 0 || local_window_px > window_px) {
     throw std::invalid_argument("MeasuredSurfaceConfig.local_window_px must be in [0, window_px]");
   }
@@ -21,6 +22,13 @@ void MeasuredSurfaceConfig::validate() const {
   }
   if (grid_step_px < 1 || grid_step_px > window_px) {
     throw std::invalid_argument("MeasuredSurfaceConfig.grid_step_px must be in [1, window_px]");
+  }
+  if (window_px >= 32 * sample_step_px) {
+    // (window_px / 2 / sample_step_px) samples each side: at most 2 * 15 * 16 + 1 pair means.
+    throw std::invalid_argument(
+        "MeasuredSurfaceConfig.window_px must be below 32 * sample_step_px (the median takes "
+        "at most " +
+        std::to_string(MedianNetwork::kMaxSlots) + " pair means)");
   }
   if (grid_step_px % sample_step_px != 0) {
     throw std::invalid_argument(
@@ -49,56 +57,35 @@ namespace {
 // centre's disparity, whatever the slope and also where invalid pixels (the range limit, an
 // image border, a matcher's holes) lie on one side only.
 bool inlierPairMean(const DisparityImageView& image, int u, int v, int reach, float reference,
-                    double limit, int needed, float* mean) {
-  auto accepted = [&](float d) { return isValidDisparity(d) && std::abs(d - reference) <= limit; };
+                    float limit, int needed, float* mean) {
+  // Without a branch on the pixels' values (noise makes them unpredictable): NaN and +inf fail
+  // the comparisons.
+  auto accepted = [&](float d) { return (d > 0) & (std::abs(d - reference) <= limit); };
   // A pair needs both pixels in the image.
   const int reach_u = std::min({reach, u, image.width - 1 - u});
   const int reach_v = std::min({reach, v, image.height - 1 - v});
+  const std::size_t stride = image.row_stride > 0 ? image.row_stride : image.width;
+  const float* centre = image.disparity + static_cast<std::size_t>(v) * stride + u;
   double sum = 0;
   int count = 0;
   for (int dv = -reach_v; dv <= 0; ++dv) {
+    const float* row = centre + dv * static_cast<std::ptrdiff_t>(stride);
+    const float* mirrored = centre - dv * static_cast<std::ptrdiff_t>(stride);
     const int last = dv == 0 ? -1 : reach_u;
     for (int du = -reach_u; du <= last; ++du) {
-      const float first = image.at(u + du, v + dv), second = image.at(u - du, v - dv);
-      if (!accepted(first) || !accepted(second)) continue;
-      sum += 0.5 * (first + second);
-      ++count;
+      const float first = row[du], second = mirrored[-du];
+      const bool both = accepted(first) & accepted(second);
+      sum += both ? 0.5 * (first + second) : 0.0;
+      count += both;
     }
   }
-  const float centre = image.at(u, v);
-  if (accepted(centre)) {
-    sum += centre;
+  if (accepted(*centre)) {
+    sum += *centre;
     ++count;
   }
   if (count < needed) return false;
   *mean = static_cast<float>(sum / count);
   return true;
-}
-
-// The upper median of count values (values must have room for kRanked). Up to kRanked values (a
-// window's few tens) by their ranks, every pair compared in loops of fixed length that the
-// compiler vectorises, without a data-dependent branch: std::nth_element's introselect
-// mispredicts its branches on noise: the wide windows of a 741 x 497 frame took 7.1 ms on one
-// thread with it, 2.9 ms by rank.
-constexpr std::size_t kRanked = 32;
-float medianOf(float* values, std::size_t count) {
-  const std::size_t middle = count / 2;
-  if (count > kRanked) {
-    std::nth_element(values, values + middle, values + count);
-    return values[middle];
-  }
-  // Padding with +inf leaves every real value's rank as it is.
-  std::fill(values + count, values + kRanked, std::numeric_limits<float>::infinity());
-  // rank(i) = #{j : v_j < v_i} + #{j < i : v_j = v_i}: a permutation of 0 .. count - 1.
-  float median = values[0];
-  for (std::size_t i = 0; i < count; ++i) {
-    const float value = values[i];
-    int rank = 0;
-    for (std::size_t j = 0; j < kRanked; ++j) rank += static_cast<int>(values[j] < value);
-    for (std::size_t j = 0; j < i; ++j) rank += static_cast<int>(values[j] == value);
-    if (static_cast<std::size_t>(rank) == middle) median = value;
-  }
-  return median;
 }
 
 }  // namespace
@@ -135,18 +122,18 @@ class SampleLattice {
       : step_(step), pad_(pad), columns_((image.width - 1) / step + 1 + 2 * pad) {
     const int rows = (image.height - 1) / step + 1 + 2 * pad;
     samples_.assign(static_cast<std::size_t>(columns_) * rows, kNoSurface);
-    for (int v = 0; v < image.height; v += step) {
-      for (int u = 0; u < image.width; u += step) {
-        const float d = image.at(u, v);
-        if (isValidDisparity(d)) samples_[index(u / step, v / step)] = d;
+    for (int j = 0; j * step < image.height; ++j) {
+      for (int i = 0; i * step < image.width; ++i) {
+        const float d = image.at(i * step, j * step);
+        if (isValidDisparity(d)) samples_[index(i, j)] = d;
       }
     }
   }
   // The means of the point-symmetric sample pairs about pixel (u, v) (on the lattice) within
-  // `reach` samples, and the centre sample, a pair only where both are valid, written to `means`
-  // (room for 2 reach (reach + 1) + 1); returns their count.
-  std::size_t pairMeans(int u, int v, int reach, float* means) const {
-    std::size_t count = 0;
+  // `reach` samples, and the centre sample, a pair only where both are valid, written to lane
+  // `lane` of `rows` (2 reach (reach + 1) + 1 of them); returns their count.
+  int pairMeans(int u, int v, int reach, MedianNetwork::Lanes* rows, int lane) const {
+    int count = 0;
     const int i = u / step_, j = v / step_;
     for (int dj = -reach; dj <= 0; ++dj) {
       const float* row = &samples_[index(i, j + dj)];
@@ -154,12 +141,12 @@ class SampleLattice {
       const int last = dj == 0 ? -1 : reach;
       for (int di = -reach; di <= last; ++di) {
         const float mean = 0.5f * (row[di] + mirrored[-di]);
-        means[count] = mean;
+        rows[count][lane] = mean;
         count += std::isnan(mean) ? 0 : 1;  // NaN where either sample is
       }
     }
     const float centre = samples_[index(i, j)];
-    means[count] = centre;
+    rows[count][lane] = centre;
     return count + (std::isnan(centre) ? 0 : 1);
   }
 
@@ -175,31 +162,43 @@ class SampleLattice {
 
 void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
                                    const MeasuredSurfaceConfig& config) {
+  constexpr int kLanes = MedianNetwork::kLanes;
   const int reach = (config.window_px / 2) / config.sample_step_px;
   const SampleLattice lattice(disparity, config.sample_step_px, reach);
   const int per_side = 2 * reach + 1;
-  const std::size_t needed =
-      static_cast<std::size_t>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
+  const int slots = 2 * reach * (reach + 1) + 1;  // pair means and the centre
+  const int needed = static_cast<int>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
+  const MedianNetwork network(slots);
 #pragma omp parallel
   {
-    std::vector<float> wide(std::max<std::size_t>(kRanked, 2 * reach * (reach + 1) + 1));
+    std::vector<MedianNetwork::Lanes> lanes(slots);
+    int counts[kLanes];
+    float robust[kLanes];
 #pragma omp for schedule(static)
     for (int j = 0; j < rows_; ++j) {
-      for (int i = 0; i < columns_; ++i) {
-        const int u = i * step_, v = j * step_;
-        // 1. The wide window's median: robust while a patch spoils fewer than half its pairs, but
-        //    on a kink of the surface (a corner, an object's edge) biased by the window's size.
-        const std::size_t count = lattice.pairMeans(u, v, reach, wide.data());
-        if (count < needed) continue;  // needed >= 1: min_valid > 0
-        const float robust = medianOf(wide.data(), count);
+      for (int first = 0; first < columns_; first += kLanes) {
+        // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
+        //    spoils fewer than half a window's pairs, but on a kink of the surface (a corner, an
+        //    object's edge) biased by the window's size.
+        const int lanes_used = std::min(kLanes, columns_ - first);
+        for (int l = 0; l < kLanes; ++l) {
+          counts[l] = 0;
+          if (l >= lanes_used) continue;
+          counts[l] = lattice.pairMeans((first + l) * step_, j * step_, reach, lanes.data(), l);
+        }
+        network.medians(lanes.data(), counts, robust);
         // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
         //    left out, and a kink's bias that of the small window.
-        float surface = robust;
-        if (config.local_window_px > 0) {
-          inlierPairMean(disparity, u, v, config.local_window_px / 2, robust, config.inlier_px,
-                         kMinLocalPairs, &surface);
+        for (int l = 0; l < lanes_used; ++l) {
+          if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
+          float surface = robust[l];
+          if (config.local_window_px > 0) {
+            inlierPairMean(disparity, (first + l) * step_, j * step_, config.local_window_px / 2,
+                           robust[l], static_cast<float>(config.inlier_px), kMinLocalPairs,
+                           &surface);
+          }
+          cells_[linear(first + l, j)] = surface;
         }
-        cells_[linear(i, j)] = surface;
       }
     }
   }

@@ -58,7 +58,7 @@ double surfaceDepth(const MeasuredSurface& surface, double u, double v) {
 
 TEST(MeasuredSurface, GivesAPlanesDepthAtEveryPixel) {
   const Plane plane;
-  // The default window (25 values to a median, ranked) and a wider one (61, by selection).
+  // The default window (25 values to a median) and a wider one (61).
   MeasuredSurfaceConfig wide;
   wide.window_px = 41;
   for (const MeasuredSurfaceConfig& config : {MeasuredSurfaceConfig(), wide}) {
@@ -210,6 +210,10 @@ TEST(MeasuredSurface, RejectsBadConfigurations) {
   rejects([](MeasuredSurfaceConfig& c) { c.inlier_px = 0.0; });
   rejects([](MeasuredSurfaceConfig& c) { c.grid_step_px = 6; });  // not a multiple of 4
   rejects([](MeasuredSurfaceConfig& c) { c.step_px = -0.1; });
+  rejects([](MeasuredSurfaceConfig& c) { c.window_px = 128; });  // 545 pair means
+  MeasuredSurfaceConfig widest;
+  widest.window_px = 127;  // 481 pair means: the network's widest median
+  EXPECT_NO_THROW(MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity(), widest));
 }
 
 }  // namespace

@@ -1,0 +1,38 @@
+// The upper medians of many small sets of values at once, by a sorting network pruned to its
+// middle output: the same compare-exchanges for every set, without a data-dependent branch, so
+// that the compiler runs kLanes sets in one vector register. The measured surface takes one
+// median per grid point, tens of thousands a frame; std::nth_element mispredicts its branches on
+// noisy values and sorts one set at a time.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+namespace occupancy_fusion {
+
+class MedianNetwork {
+ public:
+  static constexpr int kLanes = 8;  // sets per call, one per lane
+  static constexpr int kMaxSlots = 512;
+  using Lanes = std::array<float, kLanes>;  // one value of each set
+
+  // For sets of up to `slots` values (1 .. kMaxSlots); throws std::invalid_argument otherwise.
+  explicit MedianNetwork(int slots);
+
+  int slots() const { return slots_; }
+  std::size_t exchanges() const { return exchanges_.size(); }
+
+  // values: slots() rows, lane l's set in column l, its first counts[l] rows valid
+  // (counts[l] in 1 .. slots(); 0: any result). Overwrites the rows; returns in medians[l] the
+  // upper median of lane l's set (the value of rank count / 2, counted from 0).
+  void medians(Lanes* values, const int* counts, float* medians) const;
+
+ private:
+  int slots_;
+  int middle_;                                  // the output wire of the median
+  std::vector<std::pair<int, int>> exchanges_;  // (low, high) wires, in order
+};
+
+}  // namespace occupancy_fusion
