@@ -118,8 +118,10 @@ namespace {
 // the image needs no bounds checks: the wide windows of all grid nodes read this one lattice.
 class SampleLattice {
  public:
-  SampleLattice(const DisparityImageView& image, int step, int pad)
-      : step_(step), pad_(pad), columns_((image.width - 1) / step + 1 + 2 * pad) {
+  // extra: lattice points past the image's last column that a read may reach (the lanes past
+  // the last grid point), NaN as the padding.
+  SampleLattice(const DisparityImageView& image, int step, int pad, int extra)
+      : pad_(pad), columns_((image.width - 1) / step + 1 + 2 * pad + extra) {
     const int rows = (image.height - 1) / step + 1 + 2 * pad;
     samples_.assign(static_cast<std::size_t>(columns_) * rows, kNoSurface);
     for (int j = 0; j * step < image.height; ++j) {
@@ -129,32 +131,31 @@ class SampleLattice {
       }
     }
   }
-  // The means of the point-symmetric sample pairs about pixel (u, v) (on the lattice) within
-  // `reach` samples, and the centre sample, a pair only where both are valid, written to lane
-  // `lane` of `rows` (2 reach (reach + 1) + 1 of them); returns their count.
-  int pairMeans(int u, int v, int reach, MedianNetwork::Lanes* rows, int lane) const {
-    int count = 0;
-    const int i = u / step_, j = v / step_;
+  // The means of the point-symmetric sample pairs within `reach` samples, and the centre
+  // sample, about the lattice points (i + l * stride, j) of the lanes l: NaN where a sample is
+  // missing, one row of `rows` (2 reach (reach + 1) + 1 of them) a pair.
+  void pairMeans(int i, int j, int stride, int reach, MedianNetwork::Lanes* rows) const {
+    constexpr int kLanes = MedianNetwork::kLanes;
+    int slot = 0;
     for (int dj = -reach; dj <= 0; ++dj) {
       const float* row = &samples_[index(i, j + dj)];
       const float* mirrored = &samples_[index(i, j - dj)];
       const int last = dj == 0 ? -1 : reach;
-      for (int di = -reach; di <= last; ++di) {
-        const float mean = 0.5f * (row[di] + mirrored[-di]);
-        rows[count][lane] = mean;
-        count += std::isnan(mean) ? 0 : 1;  // NaN where either sample is
+      for (int di = -reach; di <= last; ++di, ++slot) {
+        for (int l = 0; l < kLanes; ++l) {
+          rows[slot][l] = 0.5f * (row[l * stride + di] + mirrored[l * stride - di]);
+        }
       }
     }
-    const float centre = samples_[index(i, j)];
-    rows[count][lane] = centre;
-    return count + (std::isnan(centre) ? 0 : 1);
+    const float* centre = &samples_[index(i, j)];
+    for (int l = 0; l < kLanes; ++l) rows[slot][l] = centre[l * stride];
   }
 
  private:
   std::size_t index(int i, int j) const {
     return static_cast<std::size_t>(j + pad_) * columns_ + (i + pad_);
   }
-  int step_, pad_, columns_;
+  int pad_, columns_;
   std::vector<float> samples_;
 };
 
@@ -164,7 +165,8 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
                                    const MeasuredSurfaceConfig& config) {
   constexpr int kLanes = MedianNetwork::kLanes;
   const int reach = (config.window_px / 2) / config.sample_step_px;
-  const SampleLattice lattice(disparity, config.sample_step_px, reach);
+  const int stride = step_ / config.sample_step_px;  // lattice points from one node to the next
+  const SampleLattice lattice(disparity, config.sample_step_px, reach, (kLanes - 1) * stride);
   const int per_side = 2 * reach + 1;
   const int slots = 2 * reach * (reach + 1) + 1;  // pair means and the centre
   const int needed = static_cast<int>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
@@ -180,13 +182,9 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
         // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
         //    spoils fewer than half a window's pairs, but on a kink of the surface (a corner, an
         //    object's edge) biased by the window's size.
-        const int lanes_used = std::min(kLanes, columns_ - first);
-        for (int l = 0; l < kLanes; ++l) {
-          counts[l] = 0;
-          if (l >= lanes_used) continue;
-          counts[l] = lattice.pairMeans((first + l) * step_, j * step_, reach, lanes.data(), l);
-        }
+        lattice.pairMeans(first * stride, j * stride, stride, reach, lanes.data());
         network.medians(lanes.data(), counts, robust);
+        const int lanes_used = std::min(kLanes, columns_ - first);
         // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
         //    left out, and a kink's bias that of the small window.
         for (int l = 0; l < lanes_used; ++l) {

@@ -1,6 +1,8 @@
 #include "occupancy_fusion/integrators/median_network.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -53,14 +55,27 @@ MedianNetwork::MedianNetwork(int slots) : slots_(slots), middle_(slots / 2) {
   exchanges_ = prunedTo(oddEvenMergeSort(slots), slots, middle_);
 }
 
-void MedianNetwork::medians(Lanes* values, const int* counts, float* medians) const {
-  // A set of n values padded with middle - n / 2 times -inf and the rest +inf has its upper
-  // median on the middle wire: -inf ... v_0 .. v_n-1 ... +inf, v_(n/2) at middle.
+void MedianNetwork::medians(Lanes* values, int* counts, float* medians) const {
+  // A set of n values whose missing ones become middle - n / 2 times -inf and the rest +inf has
+  // its upper median on the middle wire: -inf ... v_0 .. v_n-1 ... +inf, v_(n/2) at middle.
+  // Lane by lane in step, so that the compiler keeps the lanes in one register.
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  for (int l = 0; l < kLanes; ++l) {
-    const int n = std::clamp(counts[l], 0, slots_);
-    const int below = std::max(0, middle_ - n / 2);
-    for (int r = n; r < slots_; ++r) values[r][l] = r < n + below ? -kInf : kInf;
+  // Counts as floats: a float selection by an integer comparison does not vectorise.
+  float valid[kLanes] = {}, below[kLanes], missing[kLanes] = {};
+  for (int r = 0; r < slots_; ++r) {
+    const Lanes row = values[r];
+    for (int l = 0; l < kLanes; ++l) valid[l] += row[l] == row[l] ? 1.0f : 0.0f;  // not NaN
+  }
+  for (int l = 0; l < kLanes; ++l) below[l] = middle_ - std::floor(0.5f * valid[l]);
+  for (int r = 0; r < slots_; ++r) {
+    const Lanes row = values[r];
+    Lanes filled;
+    for (int l = 0; l < kLanes; ++l) {
+      const float absent = row[l] == row[l] ? 0.0f : 1.0f;  // NaN
+      filled[l] = absent > 0 ? (missing[l] < below[l] ? -kInf : kInf) : row[l];
+      missing[l] += absent;
+    }
+    values[r] = filled;
   }
   for (const auto& [low, high] : exchanges_) {
     // Through copies: the compiler cannot know that the two rows differ, and vectorises only
@@ -74,7 +89,10 @@ void MedianNetwork::medians(Lanes* values, const int* counts, float* medians) co
     values[low] = lower;
     values[high] = upper;
   }
-  for (int l = 0; l < kLanes; ++l) medians[l] = values[middle_][l];
+  for (int l = 0; l < kLanes; ++l) {
+    counts[l] = static_cast<int>(valid[l]);
+    medians[l] = values[middle_][l];
+  }
 }
 
 }  // namespace occupancy_fusion

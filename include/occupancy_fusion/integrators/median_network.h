@@ -24,10 +24,11 @@ class MedianNetwork {
   int slots() const { return slots_; }
   std::size_t exchanges() const { return exchanges_.size(); }
 
-  // values: slots() rows, lane l's set in column l, its first counts[l] rows valid
-  // (counts[l] in 1 .. slots(); 0: any result). Overwrites the rows; returns in medians[l] the
-  // upper median of lane l's set (the value of rank count / 2, counted from 0).
-  void medians(Lanes* values, const int* counts, float* medians) const;
+  // values: slots() rows, lane l's set in column l, NaN where a set has fewer values than
+  // slots. Overwrites the rows; returns in counts[l] the number of lane l's values and in
+  // medians[l] their upper median (the value of rank count / 2, counted from 0; any value where
+  // the lane has none).
+  void medians(Lanes* values, int* counts, float* medians) const;
 
  private:
   int slots_;

@@ -1,8 +1,9 @@
 // MedianNetwork: the upper median of every lane's set against std::nth_element on the same
-// values, for every set size up to the network's and every number of valid values.
+// values, for set sizes up to the network's widest and every number of missing values.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -20,25 +21,31 @@ float upperMedian(std::vector<float> values) {
   return *middle;
 }
 
-void expectMediansOf(const MedianNetwork& network, std::mt19937* rng, bool ties) {
+// Lane l's set: counts[l] values at random rows, NaN in the others.
+void expectMediansOf(const MedianNetwork& network, const int* counts, std::mt19937* rng,
+                     bool ties) {
   std::uniform_real_distribution<float> uniform(-5.0f, 5.0f);
-  std::uniform_int_distribution<int> count_of(1, network.slots());
   std::vector<MedianNetwork::Lanes> rows(network.slots());
   std::vector<std::vector<float>> sets(kLanes);
-  int counts[kLanes];
   for (int l = 0; l < kLanes; ++l) {
-    counts[l] = count_of(*rng);
-    for (int r = 0; r < network.slots(); ++r) {
-      // Rows past the count hold anything, also what a median must not return.
-      float value = r < counts[l] ? uniform(*rng) : 1e9f;
-      if (ties && r < counts[l]) value = std::round(value);  // many equal values
-      rows[r][l] = value;
-      if (r < counts[l]) sets[l].push_back(value);
+    std::vector<int> order(network.slots());
+    for (int r = 0; r < network.slots(); ++r) order[r] = r;
+    std::shuffle(order.begin(), order.end(), *rng);
+    for (int k = 0; k < network.slots(); ++k) {
+      float value = std::nanf("");
+      if (k < counts[l]) {
+        value = ties ? std::round(uniform(*rng)) : uniform(*rng);  // rounded: many equal
+        sets[l].push_back(value);
+      }
+      rows[order[k]][l] = value;
     }
   }
+  int found[kLanes];
   float medians[kLanes];
-  network.medians(rows.data(), counts, medians);
+  network.medians(rows.data(), found, medians);
   for (int l = 0; l < kLanes; ++l) {
+    ASSERT_EQ(found[l], counts[l]) << "slots " << network.slots() << ", lane " << l;
+    if (counts[l] == 0) continue;
     EXPECT_EQ(medians[l], upperMedian(sets[l]))
         << "slots " << network.slots() << ", lane " << l << ", " << counts[l] << " values";
   }
@@ -48,26 +55,26 @@ TEST(MedianNetwork, GivesTheUpperMedianOfEverySet) {
   std::mt19937 rng(7);
   for (int slots : {1, 2, 3, 5, 13, 16, 17, 25, 41, 61, 113, 481, 512}) {
     const MedianNetwork network(slots);
-    for (int trial = 0; trial < 60; ++trial) expectMediansOf(network, &rng, trial % 2 == 1);
+    std::uniform_int_distribution<int> count_of(0, slots);
+    for (int trial = 0; trial < 60; ++trial) {
+      int counts[kLanes];
+      for (int& count : counts) count = count_of(rng);
+      expectMediansOf(network, counts, &rng, trial % 2 == 1);
+    }
   }
 }
 
 TEST(MedianNetwork, EveryCountOfValidValues) {
-  // The padding with -inf and +inf must put the upper median on the middle wire for each count.
+  // The missing values become -inf or +inf so that the upper median lands on the middle wire,
+  // for each count, even or odd, and wherever the missing values are.
   std::mt19937 rng(11);
-  const MedianNetwork network(25);
-  std::uniform_real_distribution<float> uniform(0.0f, 100.0f);
-  for (int count = 1; count <= 25; ++count) {
-    std::vector<MedianNetwork::Lanes> rows(25);
-    int counts[kLanes];
-    std::vector<std::vector<float>> sets(kLanes);
-    for (int l = 0; l < kLanes; ++l) {
-      counts[l] = count;
-      for (int r = 0; r < count; ++r) sets[l].push_back(rows[r][l] = uniform(rng));
+  for (int slots : {24, 25}) {
+    const MedianNetwork network(slots);
+    for (int count = 0; count <= slots; ++count) {
+      int counts[kLanes];
+      for (int& c : counts) c = count;
+      expectMediansOf(network, counts, &rng, false);
     }
-    float medians[kLanes];
-    network.medians(rows.data(), counts, medians);
-    for (int l = 0; l < kLanes; ++l) EXPECT_EQ(medians[l], upperMedian(sets[l])) << count;
   }
 }
 
