@@ -160,17 +160,34 @@ int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& ca
                  "motion,resolution,input,method,frame,occupied,surface_occupied,false_occupied,"
                  "coverage,coverage_vs_octomap,false_vs_octomap\n");
   }
+  // The matcher's errors, to vary them against the default's (0.3 px noise, 12 px patches of
+  // 1.5 px offset in 30 % of the image's cells).
+  sim::DisparityNoise noise = StereoMotionSetup().noise;
+  noise.sigma_px = args.doubleValue("noise_px", noise.sigma_px);
+  noise.patch_probability = args.doubleValue("patch_probability", noise.patch_probability);
+  noise.patch_size_px = args.intValue("patch_px", noise.patch_size_px);
+  noise.patch_offset_px = args.doubleValue("patch_offset_px", noise.patch_offset_px);
+  noise.seed = static_cast<std::uint64_t>(args.intValue("seed", static_cast<int>(noise.seed)));
+  try {
+    noise.validate();
+  } catch (const std::invalid_argument& error) {
+    throw UsageError(error.what());
+  }
   VisibilityStereoConfig table_i = visibilityStereoConfigFor(StereoParameterSet::kTableI);
   VisibilityStereoConfig octomap = table_i;
   octomap.method = StereoIntegrationMethod::kOctomap;
   std::printf(
       "# matrix: %zu motions x %zu voxel sizes x %zu inputs, %d frames; ratios to the "
-      "OctoMap mode of the same frame, worst from frame 5 on\n",
-      motions.size(), resolutions.size(), inputs.size(), frames);
+      "OctoMap mode of the same frame, worst from frame 5 on; noise %.2f px, patches %.2f of "
+      "%d px cells, %.2f px offset, seed %llu\n",
+      motions.size(), resolutions.size(), inputs.size(), frames, noise.sigma_px,
+      noise.patch_probability, noise.patch_size_px, noise.patch_offset_px,
+      static_cast<unsigned long long>(noise.seed));
   for (const StereoMotionCase& motion : motions) {
     StereoMotionSetup setup;
     setup.motion = motion;
     setup.frames = frames;
+    setup.noise = noise;
     const sim::Scene scene = setup.scene();
     const StereoRecording recording = renderStereoRecording(scene, setup);
     for (double resolution : resolutions) {
