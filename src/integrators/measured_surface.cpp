@@ -1,6 +1,7 @@
 #include "occupancy_fusion/integrators/measured_surface.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -24,11 +25,11 @@ void MeasuredSurfaceConfig::validate() const {
     throw std::invalid_argument("MeasuredSurfaceConfig.grid_step_px must be in [1, window_px]");
   }
   if (window_px >= 32 * sample_step_px) {
-    // (window_px / 2 / sample_step_px) samples each side: at most 2 * 15 * 16 + 1 pair means.
+    // (window_px / 2 / sample_step_px) samples each side: at most 31^2 samples to a median.
     throw std::invalid_argument(
-        "MeasuredSurfaceConfig.window_px must be below 32 * sample_step_px (the median takes "
-        "at most " +
-        std::to_string(MedianNetwork::kMaxSlots) + " pair means)");
+        "MeasuredSurfaceConfig.window_px must be below 32 * sample_step_px (a median takes at "
+        "most " +
+        std::to_string(MedianNetwork::kMaxSlots) + " samples)");
   }
   if (grid_step_px % sample_step_px != 0) {
     throw std::invalid_argument(
@@ -51,41 +52,51 @@ bool isValidDisparity(float d) { return std::isfinite(d) && d > 0; }
 
 namespace {
 
-// The mean of the point-symmetric pixel pairs about (u, v) within `reach` px whose pixels are
-// both valid and within `limit` of `reference`, and of the centre pixel if it is; false with
-// fewer than `needed`. On a plane, whose disparity is linear in u and v, every pair mean is the
-// centre's disparity, whatever the slope and also where invalid pixels (the range limit, an
-// image border, a matcher's holes) lie on one side only.
-bool inlierPairMean(const DisparityImageView& image, int u, int v, int reach, float reference,
-                    float limit, int needed, float* mean) {
+// The point-symmetric pixel pairs about (u, v) within `reach` px whose pixels are both valid,
+// and the centre pixel if it is: how many there are, how many of them lie within `limit` of
+// `reference` (both pixels), and the mean of those. On a plane, whose disparity is linear in u
+// and v, every pair mean is the centre's disparity, whatever the slope and also where invalid
+// pixels (the range limit, an image border, a matcher's holes) lie on one side only.
+struct LocalPairs {
+  int valid = 0;
+  int inliers = 0;
+  float mean = 0;
+};
+LocalPairs localPairs(const DisparityImageView& image, int u, int v, int reach, float reference,
+                      float limit) {
   // Without a branch on the pixels' values (noise makes them unpredictable): NaN and +inf fail
   // the comparisons.
-  auto accepted = [&](float d) { return (d > 0) & (std::abs(d - reference) <= limit); };
+  auto valid = [](float d) { return (d > 0) & (d < std::numeric_limits<float>::infinity()); };
+  auto near = [&](float d) { return std::abs(d - reference) <= limit; };
   // A pair needs both pixels in the image.
   const int reach_u = std::min({reach, u, image.width - 1 - u});
   const int reach_v = std::min({reach, v, image.height - 1 - v});
   const std::size_t stride = image.row_stride > 0 ? image.row_stride : image.width;
   const float* centre = image.disparity + static_cast<std::size_t>(v) * stride + u;
   double sum = 0;
-  int count = 0;
+  LocalPairs pairs;
   for (int dv = -reach_v; dv <= 0; ++dv) {
     const float* row = centre + dv * static_cast<std::ptrdiff_t>(stride);
     const float* mirrored = centre - dv * static_cast<std::ptrdiff_t>(stride);
     const int last = dv == 0 ? -1 : reach_u;
     for (int du = -reach_u; du <= last; ++du) {
       const float first = row[du], second = mirrored[-du];
-      const bool both = accepted(first) & accepted(second);
-      sum += both ? 0.5 * (first + second) : 0.0;
-      count += both;
+      const bool both = valid(first) & valid(second);
+      const bool inlier = both & near(first) & near(second);
+      sum += inlier ? 0.5 * (first + second) : 0.0;
+      pairs.valid += both;
+      pairs.inliers += inlier;
     }
   }
-  if (accepted(*centre)) {
-    sum += *centre;
-    ++count;
+  if (valid(*centre)) {
+    ++pairs.valid;
+    if (near(*centre)) {
+      sum += *centre;
+      ++pairs.inliers;
+    }
   }
-  if (count < needed) return false;
-  *mean = static_cast<float>(sum / count);
-  return true;
+  if (pairs.inliers > 0) pairs.mean = static_cast<float>(sum / pairs.inliers);
+  return pairs;
 }
 
 }  // namespace
@@ -150,6 +161,19 @@ class SampleLattice {
     const float* centre = &samples_[index(i, j)];
     for (int l = 0; l < kLanes; ++l) rows[slot][l] = centre[l * stride];
   }
+  // The samples within `reach` of the lattice points (i + l * stride, j) themselves, not pair
+  // means, on a checkerboard (offsets whose sum is even: half of them, as evenly spread over the
+  // window): NaN where missing, one row of `rows` (((2 reach + 1)^2 + 1) / 2) an offset.
+  void samples(int i, int j, int stride, int reach, MedianNetwork::Lanes* rows) const {
+    constexpr int kLanes = MedianNetwork::kLanes;
+    int slot = 0;
+    for (int dj = -reach; dj <= reach; ++dj) {
+      const float* row = &samples_[index(i, j + dj)];
+      for (int di = -reach + (reach + dj) % 2; di <= reach; di += 2, ++slot) {
+        for (int l = 0; l < kLanes; ++l) rows[slot][l] = row[l * stride + di];
+      }
+    }
+  }
 
  private:
   std::size_t index(int i, int j) const {
@@ -168,32 +192,59 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
   const int stride = step_ / config.sample_step_px;  // lattice points from one node to the next
   const SampleLattice lattice(disparity, config.sample_step_px, reach, (kLanes - 1) * stride);
   const int per_side = 2 * reach + 1;
-  const int slots = 2 * reach * (reach + 1) + 1;  // pair means and the centre
+  const int pairs = 2 * reach * (reach + 1) + 1;  // pair means and the centre
   const int needed = static_cast<int>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
-  const MedianNetwork network(slots);
+  const MedianNetwork pair_network(pairs), sample_network((per_side * per_side + 1) / 2);
+  const int local_reach = config.local_window_px / 2;
+  const float limit = static_cast<float>(config.inlier_px);
 #pragma omp parallel
   {
-    std::vector<MedianNetwork::Lanes> lanes(slots);
-    int counts[kLanes];
-    float robust[kLanes];
+    std::vector<MedianNetwork::Lanes> rows(per_side * per_side);
+    int counts[kLanes], sample_counts[kLanes];
+    float robust[kLanes], one_side[kLanes];
+    LocalPairs local[kLanes];
 #pragma omp for schedule(static)
     for (int j = 0; j < rows_; ++j) {
+      const int v = j * step_;
       for (int first = 0; first < columns_; first += kLanes) {
+        const int lanes_used = std::min(kLanes, columns_ - first);
         // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
         //    spoils fewer than half a window's pairs, but on a kink of the surface (a corner, an
         //    object's edge) biased by the window's size.
-        lattice.pairMeans(first * stride, j * stride, stride, reach, lanes.data());
-        network.medians(lanes.data(), counts, robust);
-        const int lanes_used = std::min(kLanes, columns_ - first);
+        lattice.pairMeans(first * stride, j * stride, stride, reach, rows.data());
+        pair_network.medians(rows.data(), counts, robust);
+        if (local_reach == 0) {
+          for (int l = 0; l < lanes_used; ++l) {
+            if (counts[l] >= needed) cells_[linear(first + l, j)] = robust[l];
+          }
+          continue;
+        }
         // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
-        //    left out, and a kink's bias that of the small window.
+        //    left out, and a kink's bias that of the small window. Where the small window has
+        //    enough valid pairs but too few of them near the median, it straddles a step (an
+        //    object's outline): pairs across it have means between the two sides, and their
+        //    median is a surface in the gap that no pixel sees. There the median of the wide
+        //    window's samples themselves (every other one), which lies on one side, takes its
+        //    place.
+        bool straddles = false;
+        for (int l = 0; l < lanes_used; ++l) {
+          local[l] = localPairs(disparity, (first + l) * step_, v, local_reach, robust[l], limit);
+          straddles |= counts[l] >= needed && local[l].inliers < kMinLocalPairs &&
+                       local[l].valid >= kMinLocalPairs;
+        }
+        if (straddles) {
+          lattice.samples(first * stride, j * stride, stride, reach, rows.data());
+          sample_network.medians(rows.data(), sample_counts, one_side);
+        }
         for (int l = 0; l < lanes_used; ++l) {
           if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
           float surface = robust[l];
-          if (config.local_window_px > 0) {
-            inlierPairMean(disparity, (first + l) * step_, j * step_, config.local_window_px / 2,
-                           robust[l], static_cast<float>(config.inlier_px), kMinLocalPairs,
-                           &surface);
+          if (local[l].inliers >= kMinLocalPairs) {
+            surface = local[l].mean;
+          } else if (local[l].valid >= kMinLocalPairs) {
+            const LocalPairs side =
+                localPairs(disparity, (first + l) * step_, v, local_reach, one_side[l], limit);
+            surface = side.inliers >= kMinLocalPairs ? side.mean : one_side[l];
           }
           cells_[linear(first + l, j)] = surface;
         }

@@ -26,7 +26,7 @@ struct MeasuredSurfaceConfig {
   // px, edge of the median's window. Patches of wrong disparity up to half its area are ignored;
   // a true surface narrower than half the window (a thin pole against a far wall) is read as the
   // surface behind it, which only delays its visibility to a later frame. Below
-  // 32 * sample_step_px (127 px with 4 px samples): a median takes at most 481 pair means.
+  // 32 * sample_step_px (127 px with 4 px samples): a median takes at most 31^2 samples.
   int window_px = 25;
   // px between the grid's surfaces, whatever the input resolution of the rays: a coarser grid
   // interpolates across more of an object's outline (docs/disparity_method.md, "Moving camera").

@@ -15,7 +15,7 @@ namespace occupancy_fusion {
 class MedianNetwork {
  public:
   static constexpr int kLanes = 8;  // sets per call, one per lane
-  static constexpr int kMaxSlots = 512;
+  static constexpr int kMaxSlots = 1024;
   using Lanes = std::array<float, kLanes>;  // one value of each set
 
   // For sets of up to `slots` values (1 .. kMaxSlots); throws std::invalid_argument otherwise.

@@ -120,13 +120,13 @@ TEST(MeasuredSurface, ReachesTheRangeLimit) {
 
 // A fronto-parallel plane at 3 m left of column `edge` and one at 3.5 m from it on (a doorway's
 // jamb against the wall behind it: 0.71 px of disparity, within the small window's inlier_px).
-std::vector<float> stepImage(int edge) {
+std::vector<float> stepImage(int edge, double near = 3.0, double far = 3.5) {
   std::vector<float> image(static_cast<std::size_t>(kWidth) * kHeight);
   const double focal_baseline = kCamera.fx * kCamera.baseline;
   for (int v = 0; v < kHeight; ++v) {
     for (int u = 0; u < kWidth; ++u) {
       image[static_cast<std::size_t>(v) * kWidth + u] =
-          static_cast<float>(focal_baseline / (u < edge ? 3.0 : 3.5));
+          static_cast<float>(focal_baseline / (u < edge ? near : far));
     }
   }
   return image;
@@ -155,6 +155,20 @@ TEST(MeasuredSurface, DoesNotInterpolateAcrossAStep) {
   for (double u : {60.0, 70.0, 75.0}) EXPECT_NEAR(surfaceDepth(surface, u, 30.0), 3.0, 1e-4);
   for (double u : {78.0, 81.5}) EXPECT_NEAR(surfaceDepth(surface, u, 30.0), 3.0, 0.1);
   for (double u : {82.0, 84.0, 99.0}) EXPECT_NEAR(surfaceDepth(surface, u, 30.0), 3.5, 1e-4);
+}
+
+TEST(MeasuredSurface, PutsNoSurfaceIntoTheGapOfAWideStep) {
+  // An object's outline at 2 m against a wall at 4 m (7.5 against 3.75 px), one pixel past grid
+  // node 80: node 80's wide window pairs 21 of its 25 samples across the outline, and the median
+  // of the pair means (5.6 px, 2.7 m) is a surface no pixel sees, with no small-window pixel
+  // within inlier_px of it. The node reads one side instead, and so does every pixel.
+  const MeasuredSurface surface = surfaceOf(stepImage(81, 2.0, 4.0));
+  for (double u = 60; u <= 100; u += 0.5) {
+    const double z = surfaceDepth(surface, u, 59.5);
+    EXPECT_TRUE(std::abs(z - 2.0) < 0.02 || std::abs(z - 4.0) < 0.04) << "pixel " << u << ": " << z;
+  }
+  EXPECT_NEAR(surfaceDepth(surface, 80, 59.5), 2.0, 1e-4);  // the node's own pixel is near
+  EXPECT_NEAR(surfaceDepth(surface, 88, 59.5), 4.0, 1e-4);
 }
 
 TEST(MeasuredSurface, IgnoresPatchesOfWrongDisparity) {
@@ -210,9 +224,9 @@ TEST(MeasuredSurface, RejectsBadConfigurations) {
   rejects([](MeasuredSurfaceConfig& c) { c.inlier_px = 0.0; });
   rejects([](MeasuredSurfaceConfig& c) { c.grid_step_px = 6; });  // not a multiple of 4
   rejects([](MeasuredSurfaceConfig& c) { c.step_px = -0.1; });
-  rejects([](MeasuredSurfaceConfig& c) { c.window_px = 128; });  // 545 pair means
+  rejects([](MeasuredSurfaceConfig& c) { c.window_px = 128; });  // 33^2 samples
   MeasuredSurfaceConfig widest;
-  widest.window_px = 127;  // 481 pair means: the network's widest median
+  widest.window_px = 127;  // 31^2 samples: the widest median
   EXPECT_NO_THROW(MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity(), widest));
 }
 

@@ -53,7 +53,7 @@ void expectMediansOf(const MedianNetwork& network, const int* counts, std::mt199
 
 TEST(MedianNetwork, GivesTheUpperMedianOfEverySet) {
   std::mt19937 rng(7);
-  for (int slots : {1, 2, 3, 5, 13, 16, 17, 25, 41, 61, 113, 481, 512}) {
+  for (int slots : {1, 2, 3, 5, 13, 16, 17, 25, 41, 61, 113, 481, 961, 1024}) {
     const MedianNetwork network(slots);
     std::uniform_int_distribution<int> count_of(0, slots);
     for (int trial = 0; trial < 60; ++trial) {
