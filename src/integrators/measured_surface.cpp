@@ -343,14 +343,18 @@ double MeasuredSurface::disparityAt(double u, double v) const {
   return d10 + (d00 - d10) * (1 - fu) + (d11 - d10) * fv;
 }
 
-bool MeasuredSurface::depthAt(const Eigen::Vector3d& point_in_map, double* z,
-                              double* z_surface) const {
+bool MeasuredSurface::depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
+                              double reach_m) const {
   if (empty()) return false;
   const Eigen::Vector3d p = T_camera_map_ * point_in_map;
   if (!(p.z() > 0)) return false;
   const double u = fx_ * p.x() / p.z() + cx_, v = fy_ * p.y() / p.z() + cy_;
-  if (!(u >= 0 && v >= 0 && u <= width_ - 1 && v <= height_ - 1)) return false;
-  const double d = disparityAt(u, v);
+  const double reach_u = fx_ * reach_m / p.z(), reach_v = fy_ * reach_m / p.z();
+  if (!(u >= -reach_u && v >= -reach_v && u <= width_ - 1 + reach_u &&
+        v <= height_ - 1 + reach_v)) {
+    return false;
+  }
+  const double d = disparityAt(std::clamp(u, 0.0, width_ - 1.0), std::clamp(v, 0.0, height_ - 1.0));
   if (!(d > 0)) return false;
   *z = p.z();
   *z_surface = focal_baseline_ / d;

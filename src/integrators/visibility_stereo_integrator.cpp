@@ -315,6 +315,8 @@ struct FrameMeasurement {
   double resolution;
   double sigma_min, sigma_max;  // m
   double face_offset;           // m, from a voxel's centre to its front and back along the depth
+  double border_reach;          // m, half a voxel's diagonal: centres this far outside the image
+                                // belong to voxels that rays through its border pixels cross
 
   struct Depth {
     double z, z_surface, sigma;
@@ -327,7 +329,7 @@ struct FrameMeasurement {
   bool depthOf(const VoxelIndex& voxel, Depth* depth) const {
     if (surface == nullptr) return false;
     const Eigen::Vector3d center = (voxel.cast<double>().array() + 0.5) * resolution;
-    if (!surface->depthAt(center, &depth->z, &depth->z_surface)) return false;
+    if (!surface->depthAt(center, &depth->z, &depth->z_surface, border_reach)) return false;
     depth->sigma = std::clamp(lambda * depth->z_surface * depth->z_surface, sigma_min, sigma_max);
     return true;
   }
@@ -719,7 +721,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
       resolution,
       config_.measured_sigma_min_voxels * resolution,
       config_.measured_sigma_max_voxels * resolution,
-      0.5 * resolution};
+      0.5 * resolution,
+      0.5 * std::sqrt(3.0) * resolution};
   const NeighbourReading neighbours{config_.unknown_neighbours == UnknownNeighbours::kKnownOnly,
                                     logit(config_.unknown_neighbour_occupancy),
                                     &measurement,

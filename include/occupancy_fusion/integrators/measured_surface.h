@@ -64,8 +64,12 @@ class MeasuredSurface {
   bool empty() const { return cells_.empty(); }
   // For a point in the map frame: its depth z along the optical axis and the depth of the
   // measured surface on its line of sight, z_surface; false where the image does not say
-  // (behind the camera, outside the image, no grid surface near the pixel).
-  bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface) const;
+  // (behind the camera, outside the image, no grid surface near the pixel). reach_m: a point
+  // whose projection lies outside the image by at most the projection of reach_m at its depth
+  // reads the surface at the nearest border pixel (a voxel that rays through the border pixels
+  // cross has its centre up to half its diagonal outside the image).
+  bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
+               double reach_m = 0.0) const;
   double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
 
  private:

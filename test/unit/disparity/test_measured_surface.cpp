@@ -208,6 +208,23 @@ TEST(MeasuredSurface, SaysNothingOutsideTheImageOrBehindTheCamera) {
   EXPECT_FALSE(surfaceOf(empty).depthAt(pointAt(80.0, 60.0, 2.0), &z, &z_surface));
 }
 
+TEST(MeasuredSurface, ReadsTheBorderPixelJustOutsideTheImageWithinTheReach) {
+  // A voxel that rays through the border pixels cross can have its centre outside the image; within
+  // reach_m (projected at the point's depth: 0.1 m at 2 m is 6.25 px here) it reads the surface of
+  // the nearest border pixel.
+  const Plane plane;
+  const MeasuredSurface surface = surfaceOf(planeImage(plane));
+  double z = 0, z_surface = 0;
+  ASSERT_TRUE(surface.depthAt(pointAt(-5.0, 60.0, 2.0), &z, &z_surface, 0.1));
+  EXPECT_NEAR(z, 2.0, 1e-9);
+  EXPECT_NEAR(z_surface, plane.depth(0.0, 60.0), 0.005);
+  ASSERT_TRUE(surface.depthAt(pointAt(kWidth + 3.0, kHeight + 5.0, 2.0), &z, &z_surface, 0.1));
+  EXPECT_NEAR(z_surface, plane.depth(kWidth - 1.0, kHeight - 1.0), 0.005);
+  // Farther out than the reach, or nearer the camera (where 0.1 m projects wider) still inside it.
+  EXPECT_FALSE(surface.depthAt(pointAt(-7.0, 60.0, 2.0), &z, &z_surface, 0.1));
+  EXPECT_TRUE(surface.depthAt(pointAt(-7.0, 60.0, 1.0), &z, &z_surface, 0.1));
+}
+
 TEST(MeasuredSurface, RejectsBadConfigurations) {
   const std::vector<float> image = planeImage(Plane());
   const DisparityImageView view{kWidth, kHeight, image.data(), 0};
