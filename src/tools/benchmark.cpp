@@ -303,6 +303,7 @@ const std::vector<Workload>& workloads() {
         "curves",
         "measured_window",
         "measured_step_px",
+        "measured_grid_px",
         "measured_sigma_max_voxels",
         "measured_fuse_known",
         "measured_prior",

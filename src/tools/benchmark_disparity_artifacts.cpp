@@ -273,6 +273,8 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
       args.intValue("measured_window", config.measured_surface.window_px);
   config.measured_surface.step_px =
       args.doubleValue("measured_step_px", config.measured_surface.step_px);
+  config.measured_surface.grid_step_px =
+      args.intValue("measured_grid_px", config.measured_surface.grid_step_px);
   config.measured_sigma_max_voxels =
       args.doubleValue("measured_sigma_max_voxels", config.measured_sigma_max_voxels);
   for (const auto& [option, field] :
