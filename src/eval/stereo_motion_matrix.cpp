@@ -32,13 +32,46 @@ std::vector<StereoMotionCase> stereoMatrixMotions() {
           {"standing", StereoMotion::kStanding, 0.0}};
 }
 
+std::vector<StereoMotionCase> stereoAisleMotions() {
+  return {{motionName("aisle_curve", 0.15), StereoMotion::kAisleCurve, 0.15},
+          {motionName("aisle_diagonal", 0.09), StereoMotion::kAisleDiagonal, 0.09},
+          {motionName("aisle_fast", 0.30), StereoMotion::kAisleFast, 0.30},
+          {motionName("aisle_backward", 0.10), StereoMotion::kAisleBackward, 0.10}};
+}
+
 StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
   std::string known;
-  for (const StereoMotionCase& motion : stereoMatrixMotions()) {
+  std::vector<StereoMotionCase> motions = stereoMatrixMotions();
+  for (const StereoMotionCase& aisle : stereoAisleMotions()) motions.push_back(aisle);
+  for (const StereoMotionCase& motion : motions) {
     if (motion.name == name) return motion;
     known += (known.empty() ? "" : ", ") + motion.name;
   }
   throw std::invalid_argument("unknown motion '" + name + "' (known: " + known + ")");
+}
+
+bool StereoMotionSetup::isAisle() const {
+  return motion.motion == StereoMotion::kAisleCurve ||
+         motion.motion == StereoMotion::kAisleDiagonal ||
+         motion.motion == StereoMotion::kAisleFast || motion.motion == StereoMotion::kAisleBackward;
+}
+
+StereoMotionSetup stereoSetupFor(const StereoMotionCase& motion) {
+  StereoMotionSetup setup;
+  setup.motion = motion;
+  if (!setup.isAisle()) return setup;
+  setup.width = 640;
+  setup.height = 480;
+  setup.focal_px = 420.0;
+  setup.baseline = 0.09;
+  setup.max_range = 10.0;
+  setup.noise.sigma_px = 0.4;
+  setup.noise.patch_probability = 0.25;
+  setup.noise.patch_size_px = 16;
+  setup.noise.patch_offset_px = 2.0;
+  setup.noise.patch_persistence_frames = 6;
+  setup.noise.seed = 11;
+  return setup;
 }
 
 sim::PinholeCamera StereoMotionSetup::camera() const {
@@ -57,8 +90,41 @@ StereoCamera StereoMotionSetup::stereo() const {
 }
 
 sim::Scene StereoMotionSetup::scene() const {
+  if (isAisle()) return sim::makeAisleScene();
   return motion.motion == StereoMotion::kTurn ? sim::makeRoomScene() : sim::makeCorridorScene();
 }
+
+namespace {
+
+// The aisle motions' body poses at 1 m height, pitched 0.1 rad down.
+Eigen::Isometry3d aislePose(const StereoMotionCase& motion, int k) {
+  double x = 0.3, y = 0.0, yaw_deg = 0.0;
+  switch (motion.motion) {
+    case StereoMotion::kAisleCurve:
+      x += motion.step * k;
+      y = 0.3 * std::sin(0.1 * k);
+      yaw_deg = 2.0 * k - 20.0;
+      break;
+    case StereoMotion::kAisleDiagonal:
+      x += motion.step * k * 2.0 / std::sqrt(5.0);
+      y = -0.8 + motion.step * k / std::sqrt(5.0);
+      yaw_deg = 15.0;
+      break;
+    case StereoMotion::kAisleFast:
+      x += motion.step * k;
+      break;
+    default:  // kAisleBackward
+      x = 6.0 - motion.step * k;
+      y = 0.2;
+      yaw_deg = -10.0;
+      break;
+  }
+  return Eigen::Translation3d(x, y, 1.0) *
+         Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY());
+}
+
+}  // namespace
 
 std::vector<Eigen::Isometry3d> StereoMotionSetup::poses() const {
   constexpr double kHeight = 1.2;  // m
@@ -88,6 +154,12 @@ std::vector<Eigen::Isometry3d> StereoMotionSetup::poses() const {
         pose = sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.0, -std::tan(15.0 * M_PI / 180.0)));
         break;
       }
+      case StereoMotion::kAisleCurve:
+      case StereoMotion::kAisleDiagonal:
+      case StereoMotion::kAisleFast:
+      case StereoMotion::kAisleBackward:
+        pose = aislePose(motion, k) * optical;
+        break;
     }
     poses.push_back(pose);
   }

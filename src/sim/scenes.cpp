@@ -66,6 +66,23 @@ Scene makeCorridorScene() {
   return scene;
 }
 
+Scene makeAisleScene() {
+  Scene scene;
+  scene.add(floorAtZero());
+  for (double x = 1.0; x < 13.0; x += 2.6) {
+    scene
+        .add(aabb(x, 1.5, 0.0, x + 2.2, 2.2, 2.2))           // left shelving unit
+        .add(aabb(x + 0.7, -2.3, 0.0, x + 2.9, -1.6, 1.6));  // right one, shifted
+  }
+  scene.add(aabb(14.0, -4.0, 0.0, 14.3, 4.0, 3.0))
+      .add(Cylinder::upright(5.0, 0.9, 0.0, 0.08, 2.8))
+      .add(Cylinder::upright(9.5, -1.0, 0.0, 0.3, 1.7))
+      .add(Box::yawed(Eigen::Vector3d(7.2, 0.2, 0.25), Eigen::Vector3d(1.2, 0.8, 0.5), 0.5))
+      .add(Sphere{Eigen::Vector3d(11.0, 0.6, 0.35), 0.35})
+      .add(aabb(3.0, -0.4, 0.9, 3.8, 0.2, 0.95));
+  return scene;
+}
+
 Scene makeRoomScene() {
   Scene scene;
   scene.add(floorAtZero())

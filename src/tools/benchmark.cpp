@@ -285,7 +285,9 @@ const std::vector<Workload>& workloads() {
        "      a moving camera (forward 0.03/0.1/0.2 m, turning 5 deg, sideways, standing per\n"
        "      frame), the set under test, Table I and the OctoMap mode after every frame;\n"
        "      [--noise_px S] [--patch_probability P] [--patch_px N] [--patch_offset_px O]\n"
-       "      [--seed K] vary the matcher's errors (0.3 px, 0.3 of 12 px cells, 1.5 px, 7)",
+       "      [--seed K] vary the matcher's errors (0.3 px, 0.3 of 12 px cells, 1.5 px, 7);\n"
+       "      --motions aisle_curve_0.15,aisle_diagonal_0.09,aisle_fast_0.30,aisle_backward_0.10:\n"
+       "      the check outside the matrix (a warehouse aisle, a 640x480 camera, other motions)",
        {"part",
         "frames",
         "resolution",

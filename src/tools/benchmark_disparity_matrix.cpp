@@ -126,6 +126,23 @@ cv::Mat plotRatios(const WorstCell& cell, const std::vector<std::string>& names)
   return image;
 }
 
+// The matcher's errors of a set-up with the options that vary them (--noise_px,
+// --patch_probability,
+// --patch_px, --patch_offset_px, --seed).
+sim::DisparityNoise withOptions(const CommandLine& args, sim::DisparityNoise noise) {
+  noise.sigma_px = args.doubleValue("noise_px", noise.sigma_px);
+  noise.patch_probability = args.doubleValue("patch_probability", noise.patch_probability);
+  noise.patch_size_px = args.intValue("patch_px", noise.patch_size_px);
+  noise.patch_offset_px = args.doubleValue("patch_offset_px", noise.patch_offset_px);
+  noise.seed = static_cast<std::uint64_t>(args.intValue("seed", static_cast<int>(noise.seed)));
+  try {
+    noise.validate();
+  } catch (const std::invalid_argument& error) {
+    throw UsageError(error.what());
+  }
+  return noise;
+}
+
 void writeImage(const std::string& path, const cv::Mat& image) {
   if (!cv::imwrite(path, image)) throw UsageError("cannot write " + path);
   std::printf("wrote %s\n", path.c_str());
@@ -160,34 +177,25 @@ int runDisparityMatrix(const CommandLine& args, const VisibilityStereoConfig& ca
                  "motion,resolution,input,method,frame,occupied,surface_occupied,false_occupied,"
                  "coverage,coverage_vs_octomap,false_vs_octomap\n");
   }
-  // The matcher's errors, to vary them against the default's (0.3 px noise, 12 px patches of
-  // 1.5 px offset in 30 % of the image's cells).
-  sim::DisparityNoise noise = StereoMotionSetup().noise;
-  noise.sigma_px = args.doubleValue("noise_px", noise.sigma_px);
-  noise.patch_probability = args.doubleValue("patch_probability", noise.patch_probability);
-  noise.patch_size_px = args.intValue("patch_px", noise.patch_size_px);
-  noise.patch_offset_px = args.doubleValue("patch_offset_px", noise.patch_offset_px);
-  noise.seed = static_cast<std::uint64_t>(args.intValue("seed", static_cast<int>(noise.seed)));
-  try {
-    noise.validate();
-  } catch (const std::invalid_argument& error) {
-    throw UsageError(error.what());
-  }
+  withOptions(args, StereoMotionSetup().noise);  // bad error options fail before any work
   VisibilityStereoConfig table_i = visibilityStereoConfigFor(StereoParameterSet::kTableI);
   VisibilityStereoConfig octomap = table_i;
   octomap.method = StereoIntegrationMethod::kOctomap;
   std::printf(
       "# matrix: %zu motions x %zu voxel sizes x %zu inputs, %d frames; ratios to the "
-      "OctoMap mode of the same frame, worst from frame 5 on; noise %.2f px, patches %.2f of "
-      "%d px cells, %.2f px offset, seed %llu\n",
-      motions.size(), resolutions.size(), inputs.size(), frames, noise.sigma_px,
-      noise.patch_probability, noise.patch_size_px, noise.patch_offset_px,
-      static_cast<unsigned long long>(noise.seed));
+      "OctoMap mode of the same frame, worst from frame 5 on\n",
+      motions.size(), resolutions.size(), inputs.size(), frames);
   for (const StereoMotionCase& motion : motions) {
-    StereoMotionSetup setup;
-    setup.motion = motion;
+    StereoMotionSetup setup = stereoSetupFor(motion);
     setup.frames = frames;
-    setup.noise = noise;
+    setup.noise = withOptions(args, setup.noise);
+    std::printf(
+        "# %s: %dx%d px, f %.0f px, b %.2f m, range %.0f m; noise %.2f px, patches %.2f of "
+        "%d px cells, %.2f px offset, kept %d frames, seed %llu\n",
+        motion.name.c_str(), setup.width, setup.height, setup.focal_px, setup.baseline,
+        setup.max_range, setup.noise.sigma_px, setup.noise.patch_probability,
+        setup.noise.patch_size_px, setup.noise.patch_offset_px,
+        setup.noise.patch_persistence_frames, static_cast<unsigned long long>(setup.noise.seed));
     const sim::Scene scene = setup.scene();
     const StereoRecording recording = renderStereoRecording(scene, setup);
     for (double resolution : resolutions) {

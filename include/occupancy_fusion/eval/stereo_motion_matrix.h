@@ -23,6 +23,12 @@ enum class StereoMotion {
   kTurn,      // turning in place about the vertical in the room; step in deg per frame
   kSideways,  // along the corridor's left wall (a pillar, the doorway), looking at it; m per frame
   kStanding,  // the forward start pose, unmoved
+  // The check outside the matrix: the warehouse aisle (sim::makeAisleScene), another camera
+  // (stereoSetupFor), motions the matrix does not have.
+  kAisleCurve,     // along the aisle, the heading sweeping from -20 to +58 deg; m per frame
+  kAisleDiagonal,  // across the aisle at 26.6 deg, looking 15 deg to the left; m per frame
+  kAisleFast,      // straight along the aisle; m per frame
+  kAisleBackward,  // backing out of the aisle, looking 10 deg to the right of ahead; m per frame
 };
 
 struct StereoMotionCase {
@@ -33,6 +39,9 @@ struct StereoMotionCase {
 // forward 0.03, 0.1 and 0.2 m per frame; turning 5 deg per frame; sideways 0.1 m per frame;
 // standing.
 std::vector<StereoMotionCase> stereoMatrixMotions();
+// The check outside the matrix: aisle_curve_0.15, aisle_diagonal_0.09, aisle_fast_0.30,
+// aisle_backward_0.10, 0.05 to 0.3 m per frame.
+std::vector<StereoMotionCase> stereoAisleMotions();
 StereoMotionCase stereoMotionCaseFromName(const std::string& name);  // throws on an unknown name
 
 struct StereoMotionSetup {
@@ -44,11 +53,17 @@ struct StereoMotionSetup {
   double max_range = 8.0;  // m, rendered depth limit
   sim::DisparityNoise noise = StereoCorridorSetup().noise();
 
+  bool isAisle() const;
   sim::PinholeCamera camera() const;
   StereoCamera stereo() const;
   sim::Scene scene() const;                      // corridor, or the room for kTurn
   std::vector<Eigen::Isometry3d> poses() const;  // the left optical frame per frame
 };
+
+// The set-up of a motion: the matrix's camera (above), or for the aisle motions another one:
+// 640 x 480, f = 420 px, b = 0.09 m, rendered up to 10 m, white noise 0.4 px and patches of
+// +-2 px in 25 % of 16 px cells, kept for 6 frames (seed 11).
+StereoMotionSetup stereoSetupFor(const StereoMotionCase& motion);
 
 // The rendered disparity images of a set-up (independent of the mapper).
 struct StereoRecording {

@@ -45,5 +45,14 @@ Scene makeCorridorScene();
 // sensors can move around it.
 Scene makeRoomScene();
 
+// A warehouse aisle for the stereo evaluation's check outside its matrix (other scene, camera,
+// motions): floor (half-space z <= 0); along +x, shelving 2.2 m high at y in [1.5, 2.2] and 1.6 m
+// high at y in [-2.3, -1.6], in 2.2 m long units with 0.4 m gaps, the right row shifted by
+// 0.7 m; a wall across at x in [14, 14.3]; a thin pole (r = 0.08 m) at (5, 0.9), a drum
+// (r = 0.3 m, 1.7 m high) at (9.5, -1.0), a pallet (1.2 x 0.8 x 0.5 m, yawed 0.5 rad) at
+// (7.2, 0.2), a sphere (r = 0.35 m) on the floor at (11, 0.6) and a thin table top (0.8 x 0.6 m,
+// 5 cm thick, floating at 0.9 m) at x in [3, 3.8].
+Scene makeAisleScene();
+
 }  // namespace sim
 }  // namespace occupancy_fusion

@@ -90,5 +90,24 @@ TEST(StereoMotionMatrixTest, MotionNames) {
   EXPECT_TRUE(setup.poses().back().isApprox(setup.poses().front()));
 }
 
+TEST(StereoMotionMatrixTest, AisleMotionsHaveTheirOwnCameraAndScene) {
+  EXPECT_EQ(stereoAisleMotions().size(), 4u);
+  const StereoMotionSetup aisle = stereoSetupFor(stereoMotionCaseFromName("aisle_fast_0.30"));
+  EXPECT_EQ(aisle.width, 640);
+  EXPECT_DOUBLE_EQ(aisle.baseline, 0.09);
+  EXPECT_DOUBLE_EQ(aisle.noise.patch_offset_px, 2.0);
+  const auto poses = aisle.poses();
+  EXPECT_NEAR((poses[10].translation() - poses[0].translation()).x(), 3.0, 1e-9);
+  // The aisle's far wall at x = 14 is straight ahead: the first pose sees it 13.7 m away.
+  const sim::Scene scene = aisle.scene();
+  const Eigen::Vector3d forward = poses[0].linear().col(2);  // the optical axis
+  const auto hit = scene.castRay(poses[0].translation(),
+                                 Eigen::Vector3d(forward.x(), forward.y(), 0).normalized(), 20.0);
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_NEAR(*hit, 13.7, 1e-6);
+  // The matrix's own motions keep the matrix's camera.
+  EXPECT_EQ(stereoSetupFor(stereoMotionCaseFromName("forward_0.10")).width, 320);
+}
+
 }  // namespace
 }  // namespace occupancy_fusion
