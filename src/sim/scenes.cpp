@@ -79,7 +79,7 @@ Scene makeAisleScene() {
       .add(Cylinder::upright(9.5, -1.0, 0.0, 0.3, 1.7))
       .add(Box::yawed(Eigen::Vector3d(7.2, 0.2, 0.25), Eigen::Vector3d(1.2, 0.8, 0.5), 0.5))
       .add(Sphere{Eigen::Vector3d(11.0, 0.6, 0.35), 0.35})
-      .add(aabb(3.0, -0.4, 0.9, 3.8, 0.2, 0.95));
+      .add(aabb(3.0, -1.2, 0.7, 3.8, -0.6, 0.75));
   return scene;
 }
 

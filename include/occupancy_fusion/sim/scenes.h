@@ -51,7 +51,7 @@ Scene makeRoomScene();
 // 0.7 m; a wall across at x in [14, 14.3]; a thin pole (r = 0.08 m) at (5, 0.9), a drum
 // (r = 0.3 m, 1.7 m high) at (9.5, -1.0), a pallet (1.2 x 0.8 x 0.5 m, yawed 0.5 rad) at
 // (7.2, 0.2), a sphere (r = 0.35 m) on the floor at (11, 0.6) and a thin table top (0.8 x 0.6 m,
-// 5 cm thick, floating at 0.9 m) at x in [3, 3.8].
+// 5 cm thick, floating at 0.7 m) at x in [3, 3.8], y in [-1.2, -0.6].
 Scene makeAisleScene();
 
 }  // namespace sim
