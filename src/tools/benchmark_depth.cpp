@@ -24,6 +24,7 @@
 #include "occupancy_fusion/sensors/seven_scenes_folder.h"
 #include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
+#include "occupancy_fusion/tools/peer_mappers.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -157,6 +158,17 @@ OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntr
           bench::median(frame_cpu_ms), mapHash(map)};
 }
 
+// The same clouds for the peers (tools/peer_mappers.h).
+std::vector<std::vector<Eigen::Vector3f>> eigenClouds(
+    const std::vector<octomap::Pointcloud>& clouds) {
+  std::vector<std::vector<Eigen::Vector3f>> result(clouds.size());
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    result[i].reserve(clouds[i].size());
+    for (const octomap::point3d& p : clouds[i]) result[i].emplace_back(p.x(), p.y(), p.z());
+  }
+  return result;
+}
+
 // Median milliseconds per insertPointCloud call and the tree's memory.
 std::pair<double, double> runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                                      const std::vector<Eigen::Vector3d>& origins, double resolution,
@@ -207,6 +219,12 @@ int runDepth(const CommandLine& args) {
     clouds.push_back(worldPoints(frame, camera));
     origins.push_back(frame.T_world_camera.translation());
   }
+  const std::vector<std::vector<Eigen::Vector3f>> peer_clouds = eigenClouds(clouds);
+  std::string peers;
+  for (const std::string& name : bench::compiledPeers()) peers += (peers.empty() ? "" : ",") + name;
+  std::printf(
+      "# peers on the same clouds: %s\n",
+      peers.empty() ? "none (configure with -DBONXAI_ROOT / -DUFOMAP_ROOT)" : peers.c_str());
   const int threads = omp_get_max_threads();
   std::printf(
       "# %zu frames of %dx%d, fx=%g; method=%s k=%g sigma=%g sigma_quadratic=%g "
@@ -227,7 +245,19 @@ int runDepth(const CommandLine& args) {
       plain = runOctomap(clouds, origins, resolution, false);
       discretized = runOctomap(clouds, origins, resolution, true);
     }
-    char line[512];
+    std::string peer_fields;
+    if (octomap_count > 0) {
+      for (const bench::PeerRun& peer : bench::runPeers(peer_clouds, origins, resolution)) {
+        char field[160];
+        std::snprintf(field, sizeof(field),
+                      " %s_ms_per_frame=%.2f speedup_%s=%.1f %s_memory_mb=%.1f", peer.name.c_str(),
+                      peer.median_ms, peer.name.c_str(), peer.median_ms / ours.median_ms,
+                      peer.name.c_str(), peer.memory_mb);
+        peer_fields += field;
+      }
+      omp_set_num_threads(threads);
+    }
+    char line[1024];
     std::snprintf(line, sizeof(line),
                   "depth resolution=%g frames=%zu ms_per_frame=%.2f octomap_ms_per_frame=%.1f "
                   "speedup=%.1f memory_mb=%.1f octomap_discretize_ms_per_frame=%.1f "
@@ -238,9 +268,10 @@ int runDepth(const CommandLine& args) {
                   discretized.first / ours.median_ms, octomap_count, plain.second,
                   ours.updates_per_second, threads, ours.median_cpu_ms,
                   static_cast<unsigned long long>(ours.map_hash));
-    std::printf("# %s\n", line);
+    std::string full_line = line + peer_fields;
+    std::printf("# %s\n", full_line.c_str());
     std::fflush(stdout);
-    summary.push_back(line);
+    summary.push_back(full_line);
   }
   for (const std::string& line : summary) std::printf("%s\n", line.c_str());
   return 0;

@@ -1,0 +1,31 @@
+// The open CPU mappers a user would pick instead of this package, run on the same clouds as
+// liboctomap in the benchmarks: Bonxai's ProbabilisticMap and UFOMap's OccupancyMap. Neither is
+// a dependency: each is compiled in when its install folder is given to CMake
+// (-DBONXAI_ROOT=..., -DUFOMAP_ROOT=...; docs/benchmarks.md says how to build them), and left out
+// otherwise.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace occupancy_fusion {
+namespace bench {
+
+struct PeerRun {
+  std::string name;        // e.g. "bonxai", "ufomap_discrete"
+  double median_ms = 0.0;  // per cloud, wall
+  double memory_mb = 0.0;  // the map's own figure after the last cloud
+};
+
+// The peers compiled in, in a fixed order; empty when none is.
+std::vector<std::string> compiledPeers();
+
+// Each compiled peer inserting every cloud (world frame, sensor at origins[i]) into one map of
+// the given voxel size, with the hit / miss / clamping probabilities of OccupancyModel and no
+// range limit, in the peer's recommended fast mode.
+std::vector<PeerRun> runPeers(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
+                              const std::vector<Eigen::Vector3d>& origins, double resolution);
+
+}  // namespace bench
+}  // namespace occupancy_fusion

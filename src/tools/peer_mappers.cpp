@@ -1,0 +1,119 @@
+#include "occupancy_fusion/tools/peer_mappers.h"
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+
+#include "occupancy_fusion/map/occupancy_model.h"
+
+#ifdef OCCUPANCY_FUSION_WITH_BONXAI
+#include <bonxai_map/probabilistic_map.hpp>
+#endif
+#ifdef OCCUPANCY_FUSION_WITH_UFOMAP
+#include <ufo/map/occupancy_map.h>
+#endif
+
+namespace occupancy_fusion {
+namespace bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double medianOf(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+template <typename Insert>
+double timeEach(std::size_t clouds, Insert&& insert) {
+  std::vector<double> ms;
+  for (std::size_t i = 0; i < clouds; ++i) {
+    const auto start = Clock::now();
+    insert(i);
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+  }
+  return medianOf(ms);
+}
+
+#ifdef OCCUPANCY_FUSION_WITH_BONXAI
+PeerRun runBonxai(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
+                  const std::vector<Eigen::Vector3d>& origins, double resolution) {
+  const OccupancyModel model;
+  Bonxai::ProbabilisticMap map(resolution);
+  Bonxai::ProbabilisticMap::Options options;
+  options.prob_hit_log = Bonxai::ProbabilisticMap::logods(static_cast<float>(model.prob_hit));
+  options.prob_miss_log = Bonxai::ProbabilisticMap::logods(static_cast<float>(model.prob_miss));
+  options.clamp_min_log = Bonxai::ProbabilisticMap::logods(static_cast<float>(model.clamp_min));
+  options.clamp_max_log = Bonxai::ProbabilisticMap::logods(static_cast<float>(model.clamp_max));
+  map.setOptions(options);
+  // Its insertPointCloud takes the points and the origin in one type.
+  std::vector<std::vector<Eigen::Vector3d>> points(clouds.size());
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    for (const Eigen::Vector3f& p : clouds[i]) points[i].push_back(p.cast<double>());
+  }
+  PeerRun run{"bonxai"};
+  run.median_ms = timeEach(clouds.size(), [&](std::size_t i) {
+    map.insertPointCloud(points[i], origins[i], std::numeric_limits<double>::infinity());
+  });
+  run.memory_mb = map.grid().memUsage() * 1e-6;
+  return run;
+}
+#endif
+
+#ifdef OCCUPANCY_FUSION_WITH_UFOMAP
+PeerRun runUfomap(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
+                  const std::vector<Eigen::Vector3d>& origins, double resolution) {
+  const OccupancyModel model;
+  ufo::map::OccupancyMap map(resolution);
+  map.setProbHit(model.prob_hit);
+  map.setProbMiss(model.prob_miss);
+  map.setClampingThresMin(model.clamp_min);
+  map.setClampingThresMax(model.clamp_max);
+  std::vector<ufo::map::PointCloud> points(clouds.size());
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    for (const Eigen::Vector3f& p : clouds[i])
+      points[i].push_back(ufo::map::Point3(p.x(), p.y(), p.z()));
+  }
+  // UFOMap's fast mode: the end points discretised to voxels (as liboctomap's discretize), free
+  // space at the finest depth, its own ray casting.
+  PeerRun run{"ufomap_discrete"};
+  run.median_ms = timeEach(clouds.size(), [&](std::size_t i) {
+    const ufo::map::Point3 origin(origins[i].x(), origins[i].y(), origins[i].z());
+    map.insertPointCloudDiscrete(origin, points[i], -1, 0);
+  });
+  run.memory_mb = map.memoryUsage() * 1e-6;
+  return run;
+}
+#endif
+
+}  // namespace
+
+std::vector<std::string> compiledPeers() {
+  std::vector<std::string> names;
+#ifdef OCCUPANCY_FUSION_WITH_BONXAI
+  names.push_back("bonxai");
+#endif
+#ifdef OCCUPANCY_FUSION_WITH_UFOMAP
+  names.push_back("ufomap_discrete");
+#endif
+  return names;
+}
+
+std::vector<PeerRun> runPeers(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
+                              const std::vector<Eigen::Vector3d>& origins, double resolution) {
+  std::vector<PeerRun> runs;
+#ifdef OCCUPANCY_FUSION_WITH_BONXAI
+  runs.push_back(runBonxai(clouds, origins, resolution));
+#endif
+#ifdef OCCUPANCY_FUSION_WITH_UFOMAP
+  runs.push_back(runUfomap(clouds, origins, resolution));
+#endif
+  static_cast<void>(clouds);
+  static_cast<void>(origins);
+  static_cast<void>(resolution);
+  return runs;
+}
+
+}  // namespace bench
+}  // namespace occupancy_fusion
