@@ -26,6 +26,7 @@
 #include "occupancy_fusion/sim/trajectory.h"
 #include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
+#include "occupancy_fusion/tools/peer_mappers.h"
 
 namespace occupancy_fusion {
 
@@ -139,6 +140,12 @@ int runPointCloud(const CommandLine& args) {
         octomap_clouds[i].push_back(p.x(), p.y(), p.z());
       total_points += clouds[i].points.size();
     }
+    std::vector<std::vector<Eigen::Vector3f>> peer_points;
+    std::vector<Eigen::Vector3d> peer_origins;
+    for (const SensorCloud& cloud : clouds) {
+      peer_points.push_back(cloud.points);
+      peer_origins.push_back(cloud.origin);
+    }
     for (double resolution : resolutions) {
       std::vector<double> ours_ms, octomap_ms;
       RunResult ours, theirs;
@@ -153,13 +160,24 @@ int runPointCloud(const CommandLine& args) {
       }
       const double ours_median = median(ours_ms);
       const double octomap_median = median(octomap_ms);
+      // The peers (tools/peer_mappers.h, when compiled in) on the same clouds, unlimited range.
+      std::string peer_fields;
+      if (max_range < 0) {
+        for (const bench::PeerRun& peer : bench::runPeers(peer_points, peer_origins, resolution)) {
+          char field[160];
+          std::snprintf(field, sizeof(field), " %s_ms_per_cloud=%.3f time_ratio_%s=%.3f",
+                        peer.name.c_str(), peer.median_ms, peer.name.c_str(),
+                        ours_median / peer.median_ms);
+          peer_fields += field;
+        }
+      }
       std::printf(
           "pointcloud resolution=%g points=%zu ms_per_cloud=%.3f octomap_ms_per_cloud=%.3f "
-          "time_ratio=%.3f memory_ratio=%.3f threads=%d\n",
+          "time_ratio=%.3f memory_ratio=%.3f threads=%d%s\n",
           resolution, total_points / clouds.size(), ours_median, octomap_median,
           ours_median / octomap_median,
           static_cast<double>(ours.memory_bytes) / static_cast<double>(theirs.memory_bytes),
-          threads);
+          threads, peer_fields.c_str());
       std::fflush(stdout);
     }
   }
