@@ -115,6 +115,26 @@ void castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& point, double
   }
 }
 
+// discretize: the centre of each end voxel once, in the order of the voxel's first point, as
+// OcTree's computeDiscreteUpdate builds its discretized cloud; points outside the representable
+// range are left out (and counted).
+std::vector<Eigen::Vector3f> endVoxelCentres(const std::vector<Eigen::Vector3f>& points,
+                                             double resolution, std::size_t* skipped) {
+  std::vector<Eigen::Vector3f> centres;
+  SpatialKeySet seen;
+  for (const Eigen::Vector3f& p : points) {
+    const Eigen::Vector3d point = p.cast<double>();
+    if (!isRepresentable(point, resolution)) {
+      ++*skipped;
+      continue;
+    }
+    const VoxelIndex voxel = voxelIndexOf(point, resolution);
+    if (!seen.insert(packKey(voxel)).second) continue;
+    centres.push_back(((voxel.cast<double>().array() + 0.5) * resolution).matrix().cast<float>());
+  }
+  return centres;
+}
+
 }  // namespace
 
 IntegrationStats PointCloudIntegrator::computeUpdate(
@@ -127,10 +147,13 @@ IntegrationStats PointCloudIntegrator::computeUpdate(
     stats.skipped_points = stats.points;
     return stats;
   }
-  const int count = static_cast<int>(points_in_map.size());
+  std::size_t skipped = 0;
+  std::vector<Eigen::Vector3f> centres;
+  if (config_.discretize) centres = endVoxelCentres(points_in_map, resolution, &skipped);
+  const std::vector<Eigen::Vector3f>& ends = config_.discretize ? centres : points_in_map;
+  const int count = static_cast<int>(ends.size());
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
   std::vector<VoxelUpdateSet> partial(threads > 1 ? threads - 1 : 0);
-  std::size_t skipped = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : skipped)
   {
     const int thread = omp_get_thread_num();
@@ -140,7 +163,7 @@ IntegrationStats PointCloudIntegrator::computeUpdate(
     // core is taken by another process.
 #pragma omp for schedule(dynamic, 512)
     for (int i = 0; i < count; ++i) {
-      const Eigen::Vector3d point = points_in_map[i].cast<double>();
+      const Eigen::Vector3d point = ends[i].cast<double>();
       if (!isRepresentable(point, resolution)) {
         ++skipped;
         continue;
@@ -150,7 +173,7 @@ IntegrationStats PointCloudIntegrator::computeUpdate(
   }
   for (const VoxelUpdateSet& other : partial) update->merge(other);
   stats.skipped_points = skipped;
-  stats.rays = stats.points - skipped;
+  stats.rays = config_.discretize ? ends.size() : stats.points - skipped;
   return stats;
 }
 

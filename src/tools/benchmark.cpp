@@ -97,12 +97,14 @@ struct RunResult {
   std::size_t memory_bytes = 0;
 };
 
-RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, double max_range) {
+RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, double max_range,
+                  bool discretize) {
   VoxelMapConfig map_config;
   map_config.resolution = resolution;
   VoxelMap map(map_config);
   PointCloudIntegratorConfig config;
   config.max_range = max_range;
+  config.discretize = discretize;
   const PointCloudIntegrator integrator(config);
   const auto start = Clock::now();
   for (const SensorCloud& cloud : clouds) integrator.integrate(cloud.points, cloud.origin, &map);
@@ -110,13 +112,14 @@ RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, dou
 }
 
 RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
-                     const std::vector<SensorCloud>& sources, double resolution, double max_range) {
+                     const std::vector<SensorCloud>& sources, double resolution, double max_range,
+                     bool discretize) {
   octomap::OcTree tree = bench::makeOctomapTree(resolution);
   const auto start = Clock::now();
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     const Eigen::Vector3d& o = sources[i].origin;
     tree.insertPointCloud(clouds[i], octomap::point3d(o.x(), o.y(), o.z()), max_range, false,
-                          false);
+                          discretize);
   }
   return {millisecondsSince(start) / clouds.size(), tree.memoryUsage()};
 }
@@ -129,6 +132,7 @@ int runPointCloud(const CommandLine& args) {
   const int cloud_count = positiveInt(args, "clouds", 10);
   const int repetitions = positiveInt(args, "repetitions", 3);
   const double max_range = args.doubleValue("max_range", -1.0);
+  const bool discretize = args.intValue("discretize", 0) != 0;
   const int threads = omp_get_max_threads();
 
   for (int points : point_counts) {
@@ -153,8 +157,8 @@ int runPointCloud(const CommandLine& args) {
         // OctoMap's insertPointCloud (compiled here from its headers) sets the OpenMP thread
         // count to its number of key rays, 1 in Debian's build: give ours its threads back.
         omp_set_num_threads(threads);
-        ours = runOurs(clouds, resolution, max_range);
-        theirs = runOctomap(octomap_clouds, clouds, resolution, max_range);
+        ours = runOurs(clouds, resolution, max_range, discretize);
+        theirs = runOctomap(octomap_clouds, clouds, resolution, max_range, discretize);
         ours_ms.push_back(ours.ms_per_cloud);
         octomap_ms.push_back(theirs.ms_per_cloud);
       }
@@ -173,11 +177,11 @@ int runPointCloud(const CommandLine& args) {
       }
       std::printf(
           "pointcloud resolution=%g points=%zu ms_per_cloud=%.3f octomap_ms_per_cloud=%.3f "
-          "time_ratio=%.3f memory_ratio=%.3f threads=%d%s\n",
+          "time_ratio=%.3f memory_ratio=%.3f threads=%d discretize=%d%s\n",
           resolution, total_points / clouds.size(), ours_median, octomap_median,
           ours_median / octomap_median,
           static_cast<double>(ours.memory_bytes) / static_cast<double>(theirs.memory_bytes),
-          threads, peer_fields.c_str());
+          threads, discretize ? 1 : 0, peer_fields.c_str());
       std::fflush(stdout);
     }
   }
@@ -198,10 +202,11 @@ const std::vector<Workload>& workloads() {
   static const std::vector<Workload> table{
       {"pointcloud",
        "[--resolution R[,R...]] [--points P[,P...]] [--clouds N] [--repetitions K] "
-       "[--max_range M]\n"
+       "[--max_range M] [--discretize 1]\n"
        "      depth-camera clouds (P points each, N clouds orbiting the simulator's room) into\n"
-       "      our voxel map and into octomap::OcTree::insertPointCloud; ratios are ours / octomap",
-       {"resolution", "points", "clouds", "repetitions", "max_range"},
+       "      our voxel map and into octomap::OcTree::insertPointCloud (both discretized with\n"
+       "      --discretize 1); ratios are ours / octomap, and ours / each peer compiled in",
+       {"resolution", "points", "clouds", "repetitions", "max_range", "discretize"},
        runPointCloud},
       {"publish",
        "[--known_voxels K[,K...]] [--changed_blocks B[,B...]] [--repetitions N] [--resolution R]\n"

@@ -1,6 +1,6 @@
 // OctoMap-equivalent point-cloud integration: free space along each ray, a hit at its end point,
-// one update per voxel per cloud (OcTree::insertPointCloud with lazy_eval = false and
-// discretize = false).
+// one update per voxel per cloud (OcTree::insertPointCloud with lazy_eval = false, and
+// discretize as configured).
 #pragma once
 
 #include <Eigen/Core>
@@ -119,6 +119,12 @@ struct PointCloudIntegratorConfig {
   // m; points farther from the sensor only clear free space up to this distance and add no hit.
   // Negative: unlimited. octomap_server's sensor_model/max_range.
   double max_range = -1.0;
+  // octomap_server's / OcTree::insertPointCloud's discretize = true: the points falling into one
+  // voxel share one ray, to that voxel's centre (in the order of each voxel's first point), so a
+  // dense cloud costs its end voxels' rays, not its points'. The map equals liboctomap's
+  // discretized insertion voxel for voxel; the free space differs from the plain mode's where
+  // rays to the points of one voxel pass other voxels than the ray to its centre.
+  bool discretize = false;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -126,7 +132,7 @@ struct PointCloudIntegratorConfig {
 struct IntegrationStats {
   std::size_t points = 0;           // points in the cloud
   std::size_t skipped_points = 0;   // non-finite or outside the map's coordinate range
-  std::size_t rays = 0;             // rays cast (points - skipped_points)
+  std::size_t rays = 0;             // rays cast (points - skipped_points; discretize: end voxels)
   std::size_t free_voxels = 0;      // voxels updated as free
   std::size_t occupied_voxels = 0;  // voxels updated as occupied
   double seconds = 0.0;             // wall time of the call

@@ -27,10 +27,11 @@ FusedGridConfig readFusedGridConfig(const ParameterSource& source);
 // Readers of integrator configs are defined inline: the map library, which holds the readers
 // above, must not depend on the integrators library (it links the other way round).
 
-// sensor_model/max_range (m, negative = unlimited).
+// sensor_model/max_range (m, negative = unlimited), discretize.
 inline PointCloudIntegratorConfig readPointCloudIntegratorConfig(const ParameterSource& source) {
   PointCloudIntegratorConfig config;
   source.get("sensor_model/max_range", &config.max_range);
+  source.get("discretize", &config.discretize);
   config.validate();
   return config;
 }

@@ -117,12 +117,14 @@ Comparison compare(const VoxelMap& map, const octomap::OcTree& tree) {
 }
 
 // Integrates the scans in order into both maps and compares them.
-Comparison integrateBoth(const std::vector<Scan>& scans, double resolution, double max_range) {
+Comparison integrateBoth(const std::vector<Scan>& scans, double resolution, double max_range,
+                         bool discretize = false) {
   VoxelMapConfig map_config;
   map_config.resolution = resolution;
   VoxelMap map(map_config);
   PointCloudIntegratorConfig config;
   config.max_range = max_range;
+  config.discretize = discretize;
   const PointCloudIntegrator integrator(config);
 
   octomap::OcTree tree(resolution);
@@ -137,7 +139,7 @@ Comparison integrateBoth(const std::vector<Scan>& scans, double resolution, doub
     octomap::Pointcloud cloud;
     for (const Eigen::Vector3f& p : scan.points) cloud.push_back(p.x(), p.y(), p.z());
     const octomap::point3d origin(scan.origin.x(), scan.origin.y(), scan.origin.z());
-    tree.insertPointCloud(cloud, origin, max_range, false, false);
+    tree.insertPointCloud(cloud, origin, max_range, false, discretize);
   }
   return compare(map, tree);
 }
@@ -196,6 +198,46 @@ TEST(PointCloudIntegrator, AgreesWithOctomapOverASequenceOfClouds) {
   }
   const Comparison result = integrateBoth(scans, 0.1, 3.6);
   expectAgreement(result, 10000);
+}
+
+TEST(PointCloudIntegrator, DiscretizedAgreesWithOctomapDiscretized) {
+  // A dense wall (many points per voxel) and a shell beyond max_range, over several clouds:
+  // liboctomap's discretize = true casts one ray per end voxel, to its centre.
+  std::mt19937 rng(5);
+  std::vector<Scan> scans;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d origin = floatExact(0.313 - 0.07 * i, 0.171 + 0.05 * i, 0.937);
+    Cloud cloud = wall(&rng, 3.0, 0.01);
+    const Cloud shell = randomShell(&rng, origin, 0.5, 5.0, 800);
+    cloud.insert(cloud.end(), shell.begin(), shell.end());
+    scans.push_back({cloud, origin});
+  }
+  const Comparison discretized = integrateBoth(scans, 0.1, 4.0, true);
+  expectAgreement(discretized, 10000);
+  EXPECT_GT(discretized.occupied, 500u);
+  // And it is a different map from the plain mode's (rays to centres, not to the points).
+  const Comparison plain = integrateBoth(scans, 0.1, 4.0, false);
+  EXPECT_NE(plain.voxels, discretized.voxels);
+}
+
+TEST(PointCloudIntegrator, DiscretizedCastsOneRayPerEndVoxel) {
+  PointCloudIntegratorConfig config;
+  config.discretize = true;
+  const PointCloudIntegrator integrator(config);
+  VoxelMapConfig map_config;
+  map_config.resolution = 0.5;
+  VoxelMap map(map_config);
+  // Five points in voxel (4, 0, 0), two in (4, 1, 0), one not finite.
+  const std::vector<Eigen::Vector3f> points{
+      {2.1f, 0.1f, 0.1f},    {2.2f, 0.2f, 0.3f}, {2.4f, 0.4f, 0.2f}, {2.3f, 0.1f, 0.4f},
+      {2.45f, 0.05f, 0.05f}, {2.1f, 0.6f, 0.1f}, {2.2f, 0.9f, 0.2f}, {std::nanf(""), 0.0f, 0.0f}};
+  const IntegrationStats stats = integrator.integrate(points, Eigen::Vector3d(0.1, 0.1, 0.1), &map);
+  EXPECT_EQ(stats.rays, 2u);
+  EXPECT_EQ(stats.skipped_points, 1u);
+  EXPECT_EQ(stats.occupied_voxels, 2u);
+  EXPECT_EQ(map.occupancy(VoxelIndex(4, 0, 0)), Occupancy::kOccupied);
+  EXPECT_EQ(map.occupancy(VoxelIndex(4, 1, 0)), Occupancy::kOccupied);
+  EXPECT_EQ(map.occupancy(VoxelIndex(2, 0, 0)), Occupancy::kFree);
 }
 
 VoxelMap makeMap(double resolution) {
