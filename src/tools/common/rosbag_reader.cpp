@@ -15,6 +15,9 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "occupancy_fusion/ros/conversions.h"
+#include "occupancy_fusion/ros/depth_messages.h"
+#include "occupancy_fusion/ros/disparity_messages.h"
 #include "occupancy_fusion/tools/ros_conversions.h"
 
 namespace occupancy_fusion {
@@ -305,11 +308,17 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
     PointCloudFrame frame;
     frame.header = headerOf(message, "point_cloud", cloud->header);
     try {
-      frame.points = pointsFromCloud(*cloud);
+      // The nodelets' conversion, in the sensor frame: the mapping session places the points.
+      frame.points = transformedPoints(*cloud, Eigen::Isometry3d::Identity());
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());
       return;
     }
+    // The frames hold finite points only (recording.h).
+    frame.points.erase(
+        std::remove_if(frame.points.begin(), frame.points.end(),
+                       [](const Eigen::Vector3f& point) { return !point.allFinite(); }),
+        frame.points.end());
     consumer->onPointCloud(frame);
   } else if (contains(topics_.depth_images, topic)) {
     const sensor_msgs::Image::ConstPtr image = message.instantiate<sensor_msgs::Image>();
@@ -321,8 +330,16 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
         nearestCameraInfo(depthInfoTopics(topic), frame.header.stamp, &why);
     try {
       if (info == nullptr) throw std::invalid_argument(why);
-      frame.depth = depthFromImage(*image);
-      frame.camera = intrinsicsFromCameraInfo(*info);
+      std::vector<float> storage;
+      const DepthImageView view = depthInMetres(*image, &storage);
+      frame.camera = depthCameraIntrinsics(*info, *image);
+      // A dense copy: the frame owns its pixels.
+      frame.depth.resize(static_cast<std::size_t>(view.width) * view.height);
+      for (int v = 0; v < view.height; ++v) {
+        for (int u = 0; u < view.width; ++u) {
+          frame.depth[static_cast<std::size_t>(v) * view.width + u] = view.at(u, v);
+        }
+      }
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());
       return;
@@ -338,10 +355,10 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
     const sensor_msgs::CameraInfo* info =
         nearestCameraInfo(disparityInfoTopics(topic), frame.header.stamp, &why);
     try {
-      frame.disparity = disparityFromMessage(*disparity);
+      frame.disparity = validDisparities(*disparity);
       frame.width = static_cast<int>(disparity->image.width);
       frame.height = static_cast<int>(disparity->image.height);
-      frame.camera = info != nullptr ? stereoCameraFrom(*disparity, *info)
+      frame.camera = info != nullptr ? stereoCameraOf(*disparity, *info)
                                      : stereoCameraAtImageCentre(*disparity);
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());
