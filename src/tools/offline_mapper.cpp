@@ -16,10 +16,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/file_readers.h"
 #include "occupancy_fusion/tools/map_outputs.h"
-#include "occupancy_fusion/tools/recording_mapper.h"
 #include "occupancy_fusion/tools/rosbag_reader.h"
 #include "occupancy_fusion/tools/tool_main.h"
 #include "occupancy_fusion/tools/voxel_picture.h"
@@ -159,7 +159,7 @@ Options parseOptions(const CommandLine& line) {
 // rate", so a long run shows how far it is and which sensors it is integrating.
 class ProgressPrinter {
  public:
-  ProgressPrinter(std::size_t total, const RecordingMapper* mapper, bool quiet)
+  ProgressPrinter(std::size_t total, const MappingSession* mapper, bool quiet)
       : total_(total), mapper_(mapper), quiet_(quiet) {}
 
   void operator()(std::size_t done) {
@@ -184,7 +184,7 @@ class ProgressPrinter {
 
  private:
   std::size_t total_;
-  const RecordingMapper* mapper_;
+  const MappingSession* mapper_;
   bool quiet_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_print_ = start_;
@@ -203,7 +203,7 @@ const char* measurementName(const std::string& kind) {
 }
 
 // One line per sensor kind (frames, skips with their reasons, time per frame).
-void printKinds(const RecordingStatistics& stats, std::ostream& text) {
+void printKinds(const MappingStatistics& stats, std::ostream& text) {
   for (const auto& [kind, kind_stats] : stats.by_kind) {
     text << "  " << kind << ": " << kind_stats.frames << " integrated, " << kind_stats.skipped
          << " skipped, " << kind_stats.millisecondsPerFrame() << " ms per frame, "
@@ -216,8 +216,8 @@ void printKinds(const RecordingStatistics& stats, std::ostream& text) {
 }
 
 void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
-                  const RecordingMapper& mapper, const MapOutputs& outputs, double total_seconds) {
-  const RecordingStatistics& stats = mapper.statistics();
+                  const MappingSession& mapper, const MapOutputs& outputs, double total_seconds) {
+  const MappingStatistics& stats = mapper.statistics();
   std::ostringstream text;
   text << std::fixed << std::setprecision(1);
   text << "offline_mapper: summary\n";
@@ -302,7 +302,7 @@ void writeVoxelPicture(const VoxelMap& map, const Options& options, MapOutputs* 
 struct Setup {
   Options options;
   std::unique_ptr<YamlParameterSource> parameters;
-  RecordingMapperConfig config;
+  MappingSessionConfig config;
   std::vector<std::unique_ptr<InputReader>> readers;
 };
 
@@ -340,7 +340,7 @@ Setup prepare(int argc, char** argv) {
     for (const std::string& assignment : setup.options.overrides) {
       setup.parameters->addOverride(assignment);
     }
-    setup.config = readRecordingMapperConfig(*setup.parameters);
+    setup.config = readMappingSessionConfig(*setup.parameters);
   } catch (const std::invalid_argument& error) {
     throw UsageError(std::string("bad parameters: ") + error.what());
   }
@@ -382,7 +382,7 @@ bool writeSingleScan(const Setup& setup, const ScanPicker& picker) {
 }
 
 // --load-map: a file that cannot be resumed is a bad input file (exit 2), not a mapping failure.
-void resume(const std::string& path, RecordingMapper* mapper) {
+void resume(const std::string& path, MappingSession* mapper) {
   ResumedMap resumed;
   try {
     resumed = mapper->resumeFrom(path);
@@ -399,7 +399,7 @@ int run(int argc, char** argv) {
   Setup setup = prepare(argc, argv);
   std::size_t total_frames = 0;
   for (const auto& reader : setup.readers) total_frames += reader->frameCount();
-  RecordingMapper mapper(setup.config, nullptr, &std::cerr);
+  MappingSession mapper(setup.config, nullptr, &std::cerr);
   if (!setup.options.load_map.empty()) resume(setup.options.load_map, &mapper);
   ProgressPrinter progress(total_frames, &mapper, setup.options.quiet);
   ScanPicker picker(&mapper, setup.options.single_scan);

@@ -8,7 +8,7 @@
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
-#include "occupancy_fusion/tools/recording_mapper.h"
+#include "occupancy_fusion/mapping/mapping_session.h"
 
 namespace occupancy_fusion {
 
@@ -33,7 +33,7 @@ struct MapOutputs {
 // .pgm + .yaml (map_server files of the fused 2D view), .npy (fusedLogOdds, float32, row 0 = the
 // lowest y) and .png (the 2D view, y up). With nothing known there is no 2D view: the 2D files
 // are left out. Throws std::runtime_error naming a file that cannot be written.
-MapOutputs writeMapOutputs(const RecordingMapper& mapper, const std::string& dir,
+MapOutputs writeMapOutputs(const MappingSession& mapper, const std::string& dir,
                            const std::string& name);
 
 // The grid of one laser scan in the sensor-centred frame, as Yguel et al.'s Table I evaluates

@@ -51,7 +51,7 @@ LogOddsRaster fusedLogOdds(const VoxelMap& map, const GridLayer2D* layer,
   return raster;
 }
 
-MapOutputs writeMapOutputs(const RecordingMapper& mapper, const std::string& dir,
+MapOutputs writeMapOutputs(const MappingSession& mapper, const std::string& dir,
                            const std::string& name) {
   const std::string prefix = (std::filesystem::path(dir) / name).string();
   MapOutputs outputs;

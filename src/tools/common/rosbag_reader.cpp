@@ -314,11 +314,6 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
       consumer->onUnreadable(frame.header, error.what());
       return;
     }
-    // The frames hold finite points only (recording.h).
-    frame.points.erase(
-        std::remove_if(frame.points.begin(), frame.points.end(),
-                       [](const Eigen::Vector3f& point) { return !point.allFinite(); }),
-        frame.points.end());
     consumer->onPointCloud(frame);
   } else if (contains(topics_.depth_images, topic)) {
     const sensor_msgs::Image::ConstPtr image = message.instantiate<sensor_msgs::Image>();
@@ -333,11 +328,16 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
       std::vector<float> storage;
       const DepthImageView view = depthInMetres(*image, &storage);
       frame.camera = depthCameraIntrinsics(*info, *image);
-      // A dense copy: the frame owns its pixels.
-      frame.depth.resize(static_cast<std::size_t>(view.width) * view.height);
-      for (int v = 0; v < view.height; ++v) {
-        for (int u = 0; u < view.width; ++u) {
-          frame.depth[static_cast<std::size_t>(v) * view.width + u] = view.at(u, v);
+      // The frame owns its pixels (a consumer may keep it): a dense copy where the view points
+      // into the message.
+      if (view.depth == storage.data()) {
+        frame.depth = std::move(storage);
+      } else {
+        frame.depth.resize(static_cast<std::size_t>(view.width) * view.height);
+        for (int v = 0; v < view.height; ++v) {
+          for (int u = 0; u < view.width; ++u) {
+            frame.depth[static_cast<std::size_t>(v) * view.width + u] = view.at(u, v);
+          }
         }
       }
     } catch (const std::invalid_argument& error) {
