@@ -86,12 +86,7 @@ bool carriesDepth(const std::vector<const rosbag::Bag*>& bags, const std::string
 
 FrameHeader headerOf(const rosbag::MessageInstance& message, const std::string& kind,
                      const std_msgs::Header& header) {
-  FrameHeader frame;
-  frame.kind = kind;
-  frame.source = message.getTopic();
-  frame.frame_id = header.frame_id;
-  frame.stamp = header.stamp.toSec();
-  return frame;
+  return frameHeaderOf(header, kind, message.getTopic());
 }
 
 }  // namespace
