@@ -136,8 +136,24 @@ LocalLaserGrid::LocalLaserGrid(const LocalLaserGridConfig& grid,
   clear();
 }
 
+int LocalLaserGrid::addScanner(const Pose2D& sensor_in_vehicle,
+                               const PolarLaserIntegratorConfig& integrator) {
+  scanners_.push_back(sensor_in_vehicle);
+  own_integrators_.push_back(std::make_unique<PolarLaserIntegrator>(integrator));
+  return static_cast<int>(scanners_.size()) - 1;
+}
+
+void LocalLaserGrid::moveScanner(int scanner, const Pose2D& sensor_in_vehicle) {
+  if (scanner < 0 || scanner >= scannerCount()) {
+    throw std::invalid_argument("LocalLaserGrid::moveScanner: no scanner " +
+                                std::to_string(scanner));
+  }
+  scanners_[static_cast<std::size_t>(scanner)] = sensor_in_vehicle;
+}
+
 int LocalLaserGrid::addScanner(const Pose2D& sensor_in_vehicle) {
   scanners_.push_back(sensor_in_vehicle);
+  own_integrators_.push_back(nullptr);
   if (integrator_config_.exact_cache_capacity < scanners_.size()) {
     integrator_config_.exact_cache_capacity = scanners_.size();
     integrator_ = PolarLaserIntegrator(integrator_config_);
@@ -154,7 +170,9 @@ void LocalLaserGrid::add(int scanner, const LaserScan& scan) {
   if (scanner < 0 || scanner >= scannerCount()) {
     throw std::invalid_argument("LocalLaserGrid::add: no scanner " + std::to_string(scanner));
   }
-  integrator_.integrate(scan, scanners_[static_cast<std::size_t>(scanner)], &grid_);
+  const auto id = static_cast<std::size_t>(scanner);
+  PolarLaserIntegrator& integrator = own_integrators_[id] ? *own_integrators_[id] : integrator_;
+  integrator.integrate(scan, scanners_[id], &grid_);
 }
 
 const LogOddsRaster& LocalLaserGrid::fuse(const std::vector<LaserScan>& scans) {

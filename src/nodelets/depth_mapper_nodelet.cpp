@@ -1,7 +1,7 @@
 // DepthMapper nodelet: depth images (image, through image_transport, with camera_info) -> tf2
-// message filter (pose of the optical frame in the map frame at the image stamp) ->
-// PyramidDepthIntegrator (Pirker et al.'s per-voxel inverse sensor model) -> shared map. With
-// ~publish_map it also publishes the map, for a mapper that runs alone in its own process.
+// message filter (pose of the optical frame in the map frame at the image stamp) -> the mapping
+// session (PyramidDepthIntegrator, Pirker et al.'s per-voxel inverse sensor model) -> shared map.
+// With ~publish_map it also publishes the map, for a mapper that runs alone in its own process.
 //
 // Why not image_transport::CameraSubscriber itself: it hands out (image, camera_info) pairs,
 // and tf2_ros::MessageFilter holds back messages of one type only. So the image goes through
@@ -32,6 +32,7 @@
 
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/params/depth_config_reader.h"
+#include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/depth_messages.h"
 #include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
@@ -47,7 +48,9 @@ class DepthMapper : public MapperNodeletBase {
 
   void onInit() override {
     setUpMapper([this](const ParameterSource& parameters) {
-      integrator_ = std::make_unique<PyramidDepthIntegrator>(readPyramidDepthConfig(parameters));
+      MappingSessionConfig session;
+      session.depth = readPyramidDepthConfig(parameters);
+      startSession(session);
     });
     subscribe(queueSize());
     startDiagnostics(
@@ -55,7 +58,7 @@ class DepthMapper : public MapperNodeletBase {
         [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
     NODELET_INFO("mapping depth images from '%s' with camera_info from '%s' (%s method)",
                  image_subscriber_.getTopic().c_str(), camera_info_subscriber_.getTopic().c_str(),
-                 toString(integrator_->config().method).c_str());
+                 toString(session().config().depth.method).c_str());
   }
 
   void subscribe(int queue_size) {
@@ -96,9 +99,13 @@ class DepthMapper : public MapperNodeletBase {
     }
     const std::optional<Eigen::Isometry3d> T_map_camera = poseInMap(image, "depth image");
     if (!T_map_camera) return false;
+    DepthImageFrame frame;
+    frame.header = frameHeaderOf(image.header, "depth", image_subscriber_.getTopic());
+    frame.header.T_map_sensor = *T_map_camera;
     try {
-      integrate(image, *info, *T_map_camera);
-      return true;
+      frame.camera = depthCameraIntrinsics(*info, image);
+      // Into the message's buffer where it is metres already, else into frame.depth.
+      frame.pixels = depthInMetres(image, &frame.depth);
     } catch (const DepthImageRejected& error) {
       countDropped(error.reason() == DepthImageRejected::Reason::kEncoding ? kEncoding
                                                                            : kBadCameraInfo);
@@ -106,16 +113,11 @@ class DepthMapper : public MapperNodeletBase {
                              image_subscriber_.getTopic().c_str(), error.what());
       return false;
     }
-  }
-
-  void integrate(const Image& image, const CameraInfo& info,
-                 const Eigen::Isometry3d& T_map_camera) {
-    const CameraIntrinsics camera = depthCameraIntrinsics(info, image);
-    std::vector<float> storage;
-    const DepthImageView depth = depthInMetres(image, &storage);
-    last_stats_ = integrator_->integrate(depth, camera, T_map_camera, &map().voxels());
-    NODELET_DEBUG("integrated a %dx%d depth image: %zu voxels in %.1f ms", camera.width,
-                  camera.height, last_stats_.voxels_updated, last_stats_.milliseconds);
+    if (!integrateFrame(frame, "depth image")) return false;
+    last_stats_ = session().lastDepthStats();
+    NODELET_DEBUG("integrated a %dx%d depth image: %zu voxels in %.1f ms", frame.camera.width,
+                  frame.camera.height, last_stats_.voxels_updated, last_stats_.milliseconds);
+    return true;
   }
 
   void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -136,7 +138,6 @@ class DepthMapper : public MapperNodeletBase {
     status.add("last image ms", last_stats_.milliseconds);
   }
 
-  std::unique_ptr<PyramidDepthIntegrator> integrator_;
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   image_transport::SubscriberFilter image_subscriber_;
   message_filters::Subscriber<CameraInfo> camera_info_subscriber_;

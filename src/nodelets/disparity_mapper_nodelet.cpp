@@ -1,5 +1,6 @@
 // DisparityMapper nodelet: disparity (stereo_msgs/DisparityImage) -> tf2 message filter into the
-// map frame -> VisibilityStereoIntegrator (Schauwecker & Zell 2014) -> shared map. The principal
+// map frame -> the mapping session (VisibilityStereoIntegrator, Schauwecker & Zell 2014) -> shared
+// map. The principal
 // point comes from the left camera's camera_info. With ~publish_map it also publishes the map, for
 // a mapper that runs alone in its own process.
 //
@@ -26,6 +27,7 @@
 
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/params/stereo_config_reader.h"
+#include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/disparity_messages.h"
 #include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
@@ -39,12 +41,13 @@ class DisparityMapper : public MapperNodeletBase {
 
   void onInit() override {
     setUpMapper([this](const ParameterSource& parameters) {
-      integrator_ =
-          std::make_unique<VisibilityStereoIntegrator>(readVisibilityStereoConfig(parameters));
+      MappingSessionConfig session;
+      session.stereo = readVisibilityStereoConfig(parameters);
+      startSession(session);
     });
     NODELET_INFO("stereo method '%s', input resolution %s",
-                 toString(integrator_->config().method).c_str(),
-                 toString(integrator_->config().disparity.input_resolution).c_str());
+                 toString(session().config().stereo.method).c_str(),
+                 toString(session().config().stereo.disparity.input_resolution).c_str());
     subscribe();
     startDiagnostics(
         "disparity mapping", {kInvalid, kNoCameraInfo},
@@ -89,11 +92,13 @@ class DisparityMapper : public MapperNodeletBase {
                             camera_info_subscriber_.getTopic().c_str());
       return false;
     }
-    std::vector<float> disparity;
-    StereoCamera camera;
+    DisparityFrame frame;
+    frame.header = frameHeaderOf(message.header, "disparity", disparity_subscriber_.getTopic());
+    frame.width = static_cast<int>(message.image.width);
+    frame.height = static_cast<int>(message.image.height);
     try {
-      disparity = validDisparities(message);
-      camera = stereoCameraOf(message, *camera_info);
+      frame.disparity = validDisparities(message);
+      frame.camera = stereoCameraOf(message, *camera_info);
     } catch (const std::invalid_argument& error) {
       countDropped(kInvalid);
       NODELET_ERROR_THROTTLE(5.0, "disparity image dropped: %s", error.what());
@@ -101,9 +106,9 @@ class DisparityMapper : public MapperNodeletBase {
     }
     const std::optional<Eigen::Isometry3d> T_map_camera = poseInMap(message, "disparity image");
     if (!T_map_camera) return false;
-    const DisparityImageView view{static_cast<int>(message.image.width),
-                                  static_cast<int>(message.image.height), disparity.data(), 0};
-    last_stats_ = integrator_->integrate(view, camera, *T_map_camera, &map().voxels());
+    frame.header.T_map_sensor = *T_map_camera;
+    if (!integrateFrame(frame, "disparity image")) return false;
+    last_stats_ = session().lastStereoStats();
     skipped_points_ += last_stats_.skipped_points;
     dropped_uncertain_points_ += last_stats_.dropped_uncertain;
     NODELET_DEBUG("integrated %zu points (%zu skipped) in %.1f ms, cache hit rate %.2f",
@@ -134,7 +139,6 @@ class DisparityMapper : public MapperNodeletBase {
     status.add("map version", map().voxels().version());
   }
 
-  std::unique_ptr<VisibilityStereoIntegrator> integrator_;
   ros::Subscriber camera_info_subscriber_;
   static constexpr std::size_t kCameraInfosKept = 8;
   std::deque<sensor_msgs::CameraInfo::ConstPtr> camera_infos_;  // oldest first

@@ -1,11 +1,12 @@
 // LaserMapper nodelet: one sensor_msgs/LaserScan subscriber and tf2 message filter per
 // observation source (costmap_2d's style); every scan goes through Yguel et al.'s polar laser
 // integrator into two products:
-//  - the shared map's world-frame 2D layer (scanner pose in the map frame), which the MapServer's
-//    projected_map shows fused with the 3D map;
-//  - the vehicle-frame local grid (the paper's V-grid, scanner pose in the vehicle frame), fused
-//    every cycle from the latest scan of each source and published as `local_grid`
-//    (nav_msgs/OccupancyGrid) while it has subscribers.
+//  - the shared map's world-frame 2D layer (scanner pose in the map frame), through the mapping
+//    session, by the rules offline_mapper applies (source settings, tilt, upside-down scanners,
+//    duplicate stamps); the MapServer's projected_map shows it fused with the 3D map;
+//  - the vehicle-frame local grid (the paper's V-grid, LocalLaserGrid: scanner poses in the
+//    vehicle frame, placed by the same placeScan rule), fused every cycle from the latest scan of
+//    each source and published as `local_grid` (nav_msgs/OccupancyGrid) while it has subscribers.
 // With ~publish_map it also publishes the shared map itself, for a mapper running alone.
 #include <algorithm>
 #include <atomic>
@@ -25,23 +26,13 @@
 
 #include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/params/laser_config_reader.h"
+#include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/mapper_nodelet_base.h"
 
 namespace occupancy_fusion {
 namespace {
 
 using ScanMessage = sensor_msgs::LaserScan;
-
-bool isFinite(const Eigen::Isometry3d& pose) { return pose.matrix().allFinite(); }
-
-// Log-ratio sum (Eq. 8) of one scanner's grid into the fused grid; NaN means no information.
-void addLogRatios(const LogOddsRaster& from, LogOddsRaster* into) {
-  for (std::size_t i = 0; i < into->data.size(); ++i) {
-    const float value = from.data[i];
-    if (std::isnan(value)) continue;
-    into->data[i] = std::isnan(into->data[i]) ? value : into->data[i] + value;
-  }
-}
 
 // Occupancy probability in percent, p = 1 / (1 + exp(-L)); -1 where unknown.
 void toOccupancyGrid(const LogOddsRaster& raster, nav_msgs::OccupancyGrid* grid) {
@@ -71,17 +62,16 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
 class LaserMapper : public MapperNodeletBase {
  private:
   static constexpr const char* kRejected = "rejected: bad scan or pose, tilted scanner";
-  // One observation source: its subscriber, filter, integrator for the world layer, and its
-  // latest scan with its pose in the vehicle frame for the local grid.
+  // One observation source: its subscriber, filter, and its scanner in the local grid with its
+  // latest scan (the world layer's integrator is the session's).
   struct Source {
     LaserSourceConfig config;
-    std::unique_ptr<PolarLaserIntegrator> world_integrator;
     message_filters::Subscriber<ScanMessage> subscriber;
     std::unique_ptr<tf2_ros::MessageFilter<ScanMessage>> filter;
     // Guarded by LaserMapper::local_mutex_:
-    std::unique_ptr<LocalLaserGrid> local_grid;  // one scanner: this source at `mount`
-    std::optional<Pose2D> mount;                 // the scanner in the vehicle frame
-    LaserScan latest;                            // in the mount's orientation
+    int scanner = -1;             // in local_grid_, once a scan placed it
+    std::optional<Pose2D> mount;  // the scanner in the vehicle frame
+    LaserScan latest;             // in the mount's orientation
     ros::Time latest_stamp;
     std::atomic<std::size_t> integrated{0};
     std::atomic<std::size_t> dropped{0};   // no transform in time
@@ -89,12 +79,20 @@ class LaserMapper : public MapperNodeletBase {
   };
 
   void onInit() override {
-    setUpMapper(
-        [this](const ParameterSource& parameters) { config_ = readLaserMapperConfig(parameters); });
+    setUpMapper([this](const ParameterSource& parameters) {
+      config_ = readLaserMapperConfig(parameters);
+      MappingSessionConfig session;
+      session.laser_sources = config_.sources;
+      startSession(session);
+    });
+    // Before the first scan can arrive. Every scanner has its own integrator (its source's
+    // settings): the grid's shared one is unused.
+    local_grid_ =
+        std::make_unique<LocalLaserGrid>(config_.local_grid.grid, PolarLaserIntegratorConfig());
     for (const LaserSourceConfig& source : config_.sources) subscribe(source);
     startLocalGrid();
     startDiagnostics(
-        "laser mapping", {kRejected},
+        "laser mapping", {kRejected, MappingSession::kDropTiltedScanPlane},
         [this](diagnostic_updater::DiagnosticStatusWrapper& status) { fillDiagnostics(status); });
     NODELET_INFO("mapping %zu laser source(s) into map '%s' (frame '%s') and a local grid in '%s'",
                  sources_.size(), map().name().c_str(), map().frameId().c_str(),
@@ -105,7 +103,6 @@ class LaserMapper : public MapperNodeletBase {
     sources_.push_back(std::make_unique<Source>());
     Source* source = sources_.back().get();
     source->config = config;
-    source->world_integrator = std::make_unique<PolarLaserIntegrator>(config.integrator);
     source->subscriber.subscribe(getNodeHandle(), config.topic, queueSize());
     std::vector<std::string> targets = {config_.local_grid.frame_id};
     if (config_.write_world_layer) targets.push_back(map().frameId());
@@ -120,71 +117,67 @@ class LaserMapper : public MapperNodeletBase {
         });
   }
 
-  // The scanner's pose in `frame` as the core's planar pose; the scan mirrored when the scanner
-  // is upside down in that frame (REP-103: it then sweeps clockwise).
-  Pose2D planarPoseIn(const std::string& frame, const std::string& sensor_frame,
-                      const ros::Time& stamp, double max_tilt, bool* upside_down) const {
-    const Eigen::Isometry3d pose =
-        tf2::transformToEigen(tfBuffer().lookupTransform(frame, sensor_frame, stamp));
-    if (!isFinite(pose)) {
-      throw std::invalid_argument("pose of '" + sensor_frame + "' in '" + frame +
-                                  "' is not finite");
-    }
-    return planarPose(pose, max_tilt, upside_down);
-  }
-
-  // Whether the scan was integrated.
+  // Whether the scan was integrated: into the world layer by the session (when
+  // write_world_layer), and kept for the local grid.
   bool onScan(const ScanMessage& message, Source* source) {
     const auto start = std::chrono::steady_clock::now();
-    const std::string& sensor_frame =
-        source->config.sensor_frame.empty() ? message.header.frame_id : source->config.sensor_frame;
+    LaserScanFrame frame;
+    frame.header = frameHeaderOf(message.header, "laser", source->config.topic);
+    const std::string sensor_frame = session().sensorFrameOf(frame.header);
+    Eigen::Isometry3d vehicle_T_sensor;
     try {
-      const LaserScan scan = checkedLaserScan(message);
+      frame.scan = checkedLaserScan(message);
       // Both poses first, so a failed lookup leaves both products untouched.
-      bool upside_in_vehicle = false, upside_in_map = false;
-      const Pose2D in_vehicle =
-          planarPoseIn(config_.local_grid.frame_id, sensor_frame, message.header.stamp,
-                       source->config.max_tilt, &upside_in_vehicle);
-      std::optional<Pose2D> in_map;
+      vehicle_T_sensor = tf2::transformToEigen(tfBuffer().lookupTransform(
+          config_.local_grid.frame_id, sensor_frame, message.header.stamp));
       if (config_.write_world_layer) {
-        in_map = planarPoseIn(map().frameId(), sensor_frame, message.header.stamp,
-                              source->config.max_tilt, &upside_in_map);
+        frame.header.T_map_sensor = tf2::transformToEigen(
+            tfBuffer().lookupTransform(map().frameId(), sensor_frame, message.header.stamp));
       }
-      if (in_map) {
-        source->world_integrator->integrateIntoLayer(upside_in_map ? mirrorScan(scan) : scan,
-                                                     *in_map, &map().layer());
-      }
-      keepForLocalGrid(upside_in_vehicle ? mirrorScan(scan) : scan, in_vehicle,
-                       message.header.stamp, source);
-    } catch (const std::exception& error) {  // bad scan, tf2 lookup, tilted scanner
-      ++source->rejected;
-      countDropped(kRejected);
-      NODELET_ERROR_THROTTLE(5.0, "source '%s' (topic '%s'): scan dropped: %s",
-                             source->config.name.c_str(), source->config.topic.c_str(),
-                             error.what());
+    } catch (const std::exception& error) {  // bad scan, tf2 lookup
+      reject(source, kRejected, error.what());
       return false;
     }
+    PlacedScan in_vehicle;
+    try {
+      in_vehicle = placeScan(frame.scan, vehicle_T_sensor, session().maxTiltOf(frame.header));
+    } catch (const std::invalid_argument& error) {  // tilted or not finite in the vehicle frame
+      reject(source, MappingSession::kDropTiltedScanPlane, error.what());
+      return false;
+    }
+    if (config_.write_world_layer &&
+        !integrateFrame(frame, "scan of source '" + source->config.name + "'")) {
+      ++source->rejected;
+      return false;
+    }
+    keepForLocalGrid(std::move(in_vehicle), message.header.stamp, source);
     ++source->integrated;
     last_scan_ms_ = millisecondsSince(start);
     return true;
   }
 
+  void reject(Source* source, const char* reason, const char* what) {
+    ++source->rejected;
+    countDropped(reason);
+    NODELET_ERROR_THROTTLE(5.0, "source '%s' (topic '%s'): scan dropped: %s",
+                           source->config.name.c_str(), source->config.topic.c_str(), what);
+  }
+
   // The scanners are fixed on the vehicle: the local grid (and its exact overlay) is rebuilt only
   // when a source's mount changes.
-  void keepForLocalGrid(LaserScan scan, const Pose2D& mount, const ros::Time& stamp,
-                        Source* source) {
+  void keepForLocalGrid(PlacedScan placed, const ros::Time& stamp, Source* source) {
     std::lock_guard<std::mutex> lock(local_mutex_);
     constexpr double kMountTolerance = 1e-6;  // m and rad
-    const bool moved = !source->mount || std::abs(source->mount->x - mount.x) > kMountTolerance ||
-                       std::abs(source->mount->y - mount.y) > kMountTolerance ||
-                       std::abs(source->mount->yaw - mount.yaw) > kMountTolerance;
-    if (moved) {
-      source->local_grid =
-          std::make_unique<LocalLaserGrid>(config_.local_grid.grid, source->config.integrator);
-      source->local_grid->addScanner(mount);
-      source->mount = mount;
+    const Pose2D& mount = placed.sensor;
+    if (source->scanner < 0) {
+      source->scanner = local_grid_->addScanner(mount, source->config.integrator);
+    } else if (std::abs(source->mount->x - mount.x) > kMountTolerance ||
+               std::abs(source->mount->y - mount.y) > kMountTolerance ||
+               std::abs(source->mount->yaw - mount.yaw) > kMountTolerance) {
+      local_grid_->moveScanner(source->scanner, mount);
     }
-    source->latest = std::move(scan);
+    source->mount = mount;
+    source->latest = std::move(placed.scan);
     source->latest_stamp = stamp;
   }
 
@@ -202,20 +195,15 @@ class LaserMapper : public MapperNodeletBase {
     auto message = boost::make_shared<nav_msgs::OccupancyGrid>();
     {
       std::lock_guard<std::mutex> lock(local_mutex_);
-      std::optional<LogOddsRaster> fused;
+      if (local_grid_->scannerCount() == 0) return;  // no scan yet
+      std::vector<LaserScan> scans(static_cast<std::size_t>(local_grid_->scannerCount()));
       ros::Time newest;
       for (const auto& source : sources_) {
-        if (!source->local_grid) continue;  // no scan yet
-        const LogOddsRaster& grid = source->local_grid->fuse({source->latest});
-        if (!fused) {
-          fused = grid;
-        } else {
-          addLogRatios(grid, &*fused);
-        }
+        if (source->scanner < 0) continue;
+        scans[static_cast<std::size_t>(source->scanner)] = source->latest;
         newest = std::max(newest, source->latest_stamp);
       }
-      if (!fused) return;
-      toOccupancyGrid(*fused, message.get());
+      toOccupancyGrid(local_grid_->fuse(scans), message.get());
       message->header.stamp = newest;  // the vehicle pose the grid belongs to
     }
     message->header.frame_id = config_.local_grid.frame_id;
@@ -250,6 +238,7 @@ class LaserMapper : public MapperNodeletBase {
   std::vector<std::unique_ptr<Source>> sources_;
 
   std::mutex local_mutex_;
+  std::unique_ptr<LocalLaserGrid> local_grid_;  // guarded by local_mutex_
   ros::Publisher local_grid_publisher_;
 
   std::atomic<double> last_scan_ms_{0.0};

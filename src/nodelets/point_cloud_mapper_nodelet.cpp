@@ -1,6 +1,6 @@
 // PointCloudMapper nodelet: cloud_in (sensor_msgs/PointCloud2) -> tf2 message filter into the map
-// frame -> PointCloudIntegrator -> shared map. With ~publish_map it also publishes the map, for a
-// mapper that runs alone in its own process.
+// frame -> the mapping session (PointCloudIntegrator) -> shared map. With ~publish_map it also
+// publishes the map, for a mapper that runs alone in its own process.
 #include <atomic>
 #include <memory>
 #include <optional>
@@ -25,8 +25,9 @@ class PointCloudMapper : public MapperNodeletBase {
 
   void onInit() override {
     setUpMapper([this](const ParameterSource& parameters) {
-      integrator_ =
-          std::make_unique<PointCloudIntegrator>(readPointCloudIntegratorConfig(parameters));
+      MappingSessionConfig session;
+      session.point_cloud = readPointCloudIntegratorConfig(parameters);
+      startSession(session);
     });
     cloud_subscriber_.subscribe(getNodeHandle(), "cloud_in", queueSize());
     tf_filter_ = makeMapFrameFilter<Cloud>(cloud_subscriber_, "cloud",
@@ -40,16 +41,18 @@ class PointCloudMapper : public MapperNodeletBase {
   bool onCloud(const Cloud& cloud) {
     const std::optional<Eigen::Isometry3d> map_T_cloud = poseInMap(cloud, "cloud");
     if (!map_T_cloud) return false;
-    std::vector<Eigen::Vector3f> points;
+    PointCloudFrame frame;
+    frame.header = frameHeaderOf(cloud.header, "point_cloud", cloud_subscriber_.getTopic());
+    frame.header.T_map_sensor = *map_T_cloud;
     try {
-      points = transformedPoints(cloud, *map_T_cloud);
+      frame.points = transformedPoints(cloud, Eigen::Isometry3d::Identity());
     } catch (const std::invalid_argument& error) {
       countDropped(kInvalidCloud);
       NODELET_WARN_THROTTLE(5.0, "cloud dropped: %s", error.what());
       return false;
     }
-    // The sensor sits at the origin of the cloud's frame.
-    last_stats_ = integrator_->integrate(points, map_T_cloud->translation(), &map().voxels());
+    if (!integrateFrame(frame, "cloud")) return false;
+    last_stats_ = session().lastPointCloudStats();
     skipped_points_ += last_stats_.skipped_points;
     NODELET_DEBUG("integrated %zu points (%zu skipped) in %.1f ms", last_stats_.points,
                   last_stats_.skipped_points, last_stats_.seconds * 1e3);
@@ -66,7 +69,6 @@ class PointCloudMapper : public MapperNodeletBase {
     status.add("last cloud ms", last_stats_.seconds * 1e3);
   }
 
-  std::unique_ptr<PointCloudIntegrator> integrator_;
   message_filters::Subscriber<Cloud> cloud_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<Cloud>> tf_filter_;
 

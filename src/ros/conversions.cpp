@@ -73,6 +73,16 @@ std::uint8_t xyzDatatype(const sensor_msgs::PointCloud2& cloud, std::uint32_t of
 
 }  // namespace
 
+FrameHeader frameHeaderOf(const std_msgs::Header& header, const std::string& kind,
+                          const std::string& source) {
+  FrameHeader frame;
+  frame.kind = kind;
+  frame.source = source;
+  frame.frame_id = header.frame_id;
+  frame.stamp = header.stamp.toSec();
+  return frame;
+}
+
 std::vector<Eigen::Vector3f> transformedPoints(const sensor_msgs::PointCloud2& cloud,
                                                const Eigen::Isometry3d& target_T_cloud) {
   std::uint32_t offsets[3] = {0, 0, 0};

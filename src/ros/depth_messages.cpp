@@ -5,6 +5,7 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#include "occupancy_fusion/ros/camera_info_message.h"
 #include "occupancy_fusion/ros/image_bytes.h"
 
 namespace occupancy_fusion {
@@ -13,7 +14,7 @@ DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>
   namespace enc = sensor_msgs::image_encodings;
   const bool millimetres = image.encoding == enc::TYPE_16UC1 || image.encoding == enc::MONO16;
   const bool metres = image.encoding == enc::TYPE_32FC1;
-  if (!millimetres && !metres) {
+  if (!isDepthEncoding(image.encoding)) {
     throw DepthImageRejected(
         DepthImageRejected::Reason::kEncoding,
         "encoding '" + image.encoding + "' is not a depth encoding (16UC1 in mm or 32FC1 in m)");
@@ -59,34 +60,22 @@ DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>
 CameraIntrinsics depthCameraIntrinsics(const sensor_msgs::CameraInfo& info,
                                        const sensor_msgs::Image& image) {
   using Reason = DepthImageRejected::Reason;
-  if (info.width != image.width || info.height != image.height) {
+  if (binnedWidth(info) != image.width || binnedHeight(info) != image.height) {
     throw DepthImageRejected(Reason::kCameraInfo,
-                             "camera_info is " + std::to_string(info.width) + "x" +
-                                 std::to_string(info.height) + " but the image " +
+                             "camera_info is " + std::to_string(binnedWidth(info)) + "x" +
+                                 std::to_string(binnedHeight(info)) + " but the image " +
                                  std::to_string(image.width) + "x" + std::to_string(image.height));
   }
-  if (info.binning_x > 1 || info.binning_y > 1 || info.roi.width != 0 || info.roi.height != 0) {
-    throw DepthImageRejected(Reason::kCameraInfo,
-                             "camera_info with binning or ROI is not supported");
-  }
-  CameraIntrinsics camera;
-  camera.width = static_cast<int>(info.width);
-  camera.height = static_cast<int>(info.height);
-  camera.fx = info.K[0];
-  camera.fy = info.K[4];
-  camera.cx = info.K[2];
-  camera.cy = info.K[5];
-  if (!(camera.fx > 0.0) || !(camera.fy > 0.0)) {
-    throw DepthImageRejected(Reason::kCameraInfo,
-                             "camera_info has focal length fx = " + std::to_string(camera.fx) +
-                                 ", fy = " + std::to_string(camera.fy));
-  }
   try {
-    camera.validate();
+    return intrinsicsOf(info);
   } catch (const std::invalid_argument& error) {
-    throw DepthImageRejected(Reason::kCameraInfo, std::string("camera_info: ") + error.what());
+    throw DepthImageRejected(Reason::kCameraInfo, error.what());
   }
-  return camera;
+}
+
+bool isDepthEncoding(const std::string& encoding) {
+  namespace enc = sensor_msgs::image_encodings;
+  return encoding == enc::TYPE_16UC1 || encoding == enc::MONO16 || encoding == enc::TYPE_32FC1;
 }
 
 }  // namespace occupancy_fusion

@@ -60,25 +60,22 @@ std::vector<float> validDisparities(const stereo_msgs::DisparityImage& message) 
 
 StereoCamera stereoCameraOf(const stereo_msgs::DisparityImage& message,
                             const sensor_msgs::CameraInfo& left_info) {
-  const double binning_x = std::max<std::uint32_t>(1, left_info.binning_x);
-  const double binning_y = std::max<std::uint32_t>(1, left_info.binning_y);
-  const auto binned_width = static_cast<std::uint32_t>(left_info.width / binning_x);
-  const auto binned_height = static_cast<std::uint32_t>(left_info.height / binning_y);
-  if (binned_width != message.image.width || binned_height != message.image.height) {
-    throw std::invalid_argument("camera_info is for " + std::to_string(binned_width) + "x" +
-                                std::to_string(binned_height) + " images, the disparity image is " +
-                                std::to_string(message.image.width) + "x" +
-                                std::to_string(message.image.height));
+  if (binnedWidth(left_info) != message.image.width ||
+      binnedHeight(left_info) != message.image.height) {
+    throw std::invalid_argument(
+        "camera_info is for " + std::to_string(binnedWidth(left_info)) + "x" +
+        std::to_string(binnedHeight(left_info)) + " images, the disparity image is " +
+        std::to_string(message.image.width) + "x" + std::to_string(message.image.height));
   }
-  // The disparity lives in the rectified image, whose intrinsics are P's; a camera_info without
-  // P (all zero) describes an image that needed no rectification.
-  const bool has_projection = left_info.P[0] != 0.0;
+  // f and T describe the disparity image itself (a matcher may scale them); the rest is the
+  // left camera's, by the one camera_info rule.
+  const CameraIntrinsics left = intrinsicsOf(left_info);
   StereoCamera camera;
   camera.fx = message.f;
   camera.baseline = message.T;
-  camera.fy = (has_projection ? left_info.P[5] : left_info.K[4]) / binning_y;
-  camera.cx = (has_projection ? left_info.P[2] : left_info.K[2]) / binning_x;
-  camera.cy = (has_projection ? left_info.P[6] : left_info.K[5]) / binning_y;
+  camera.fy = left.fy;
+  camera.cx = left.cx;
+  camera.cy = left.cy;
   camera.validate();
   return camera;
 }

@@ -11,9 +11,8 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "occupancy_fusion/Octomap.h"
-#include "occupancy_fusion/map/layer_files.h"
-#include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/map/octomap_conversion.h"
+#include "occupancy_fusion/mapping/map_saving.h"
 #include "occupancy_fusion/params/config_readers.h"
 #include "occupancy_fusion/ros/conversions.h"
 
@@ -390,57 +389,19 @@ bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
 
 void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
                   std::vector<std::string>* written, MapLockStatistics* lock_statistics) {
-  // One read of the voxels for both OctoMap files, and the 2D grid, before any file is touched:
-  // a map that cannot be saved (empty) leaves the previous files of this prefix as they were.
-  std::size_t skipped_voxels = 0;
-  std::vector<VoxelMap::BlockCopy> blocks;
-  {
-    const MapCallTimer timer(lock_statistics, "~save_map block copy");
-    blocks = map.voxels().copyBlocks();  // the tree is built without the map's lock
-  }
-  const std::unique_ptr<octomap::OcTree> tree =
-      toOcTree(blocks, map.voxels().resolution(), map.voxels().model(), &skipped_voxels);
-  FusedGridView view(grid);
-  OccupancyRaster raster;
-  {
-    const MapCallTimer timer(lock_statistics, "~save_map 2D view");
-    raster = view.update(map.voxels(), &map.layer());
-  }
-  LogOddsRaster layer_window;
-  {
-    const MapCallTimer timer(lock_statistics, "~save_map laser layer copy");
-    layer_window = map.layer().toLogOddsRaster();
-  }
-  if (raster.empty()) {
-    throw std::runtime_error("map '" + map.name() +
-                             "' has no known voxel in the height band and no 2D cell: nothing "
-                             "written, existing files of " +
-                             prefix + " kept");
-  }
-  if (skipped_voxels > 0) {
+  MapSaveOptions options;
+  options.band = grid;
+  const SavedMapFiles saved = saveMap(map.voxels(), map.layer(), prefix, options, written,
+                                      [lock_statistics](const char* what, double milliseconds) {
+                                        if (lock_statistics != nullptr)
+                                          lock_statistics->recordHold(what, milliseconds);
+                                      });
+  if (saved.octomap_skipped_voxels > 0) {
     ROS_WARN(
         "saving map '%s': %zu voxels lie outside OctoMap's 16-bit key range and are not in "
         "the .ot/.bt files",
-        map.name().c_str(), skipped_voxels);
+        map.name().c_str(), saved.octomap_skipped_voxels);
   }
-  const std::string ot_path = prefix + ".ot";
-  writeFileAtomically(ot_path, [&](std::ostream& out) {
-    if (!tree->write(out)) throw std::runtime_error("liboctomap failed to serialise the tree");
-  });
-  written->push_back(ot_path);
-  const std::string bt_path = prefix + ".bt";
-  writeFileAtomically(bt_path, [&](std::ostream& out) {
-    // writeBinary prunes the tree to maximum likelihood, which is why the .ot is written first.
-    if (!tree->writeBinary(out))
-      throw std::runtime_error("liboctomap failed to serialise the tree");
-  });
-  written->push_back(bt_path);
-  writeMapServerFiles(raster, prefix);
-  written->push_back(prefix + ".pgm");
-  written->push_back(prefix + ".yaml");
-  const LayerFilePaths layer_paths = writeLayerFiles(layer_window, prefix);
-  written->push_back(layer_paths.npy);
-  written->push_back(layer_paths.yaml);
 }
 
 }  // namespace occupancy_fusion

@@ -31,10 +31,17 @@ void MapperNodeletBase::setUpMapper(
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
 }
 
+void MapperNodeletBase::startSession(MappingSessionConfig config) {
+  config.frame_id = map_->frameId();
+  config.map = map_->config().voxels;
+  session_ =
+      std::make_unique<MappingSession>(config, &map_->voxels(), &map_->layer(), nullptr, nullptr);
+}
+
 void MapperNodeletBase::startDiagnostics(const std::string& task_name,
                                          const std::vector<std::string>& drop_reasons,
                                          DiagnosticsTask fill) {
-  frames_.addDropReasons({kDuplicateStamp, kPoseNotFinite});
+  frames_.addDropReasons({MappingSession::kDropDuplicateStamp, MappingSession::kDropPoseNotFinite});
   frames_.addDropReasons(drop_reasons);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
                                                                getPrivateNodeHandle(), getName());
@@ -70,30 +77,14 @@ void MapperNodeletBase::noteReceivedStamp(const std_msgs::Header& header) {
   tf_buffer_->clear();
   // Every sensor starts over: their next (earlier) stamps are no second jump.
   newest_received_ = {{header.frame_id, header.stamp}};
-  last_integrated_.clear();
+  if (session_) {
+    const std::lock_guard<std::mutex> session_lock(session_mutex_);
+    session_->forgetStamps();
+  }
   NODELET_WARN_THROTTLE(5.0,
                         "time jumped back by %.3f s in the stamps of '%s' (a looped bag?): tf "
                         "buffer cleared, mapping goes on",
                         back, header.frame_id.c_str());
-}
-
-bool MapperNodeletBase::isDuplicate(const std_msgs::Header& header) {
-  {
-    const std::lock_guard<std::mutex> lock(stamps_mutex_);
-    const auto last = last_integrated_.find(header.frame_id);
-    if (last == last_integrated_.end() || last->second != header.stamp) return false;
-  }
-  frames_.countDropped(kDuplicateStamp);
-  NODELET_WARN_THROTTLE(5.0,
-                        "frame of '%s' at %.6f has the stamp of the last one integrated: "
-                        "dropped as a duplicate",
-                        header.frame_id.c_str(), header.stamp.toSec());
-  return true;
-}
-
-void MapperNodeletBase::noteIntegratedStamp(const std_msgs::Header& header) {
-  const std::lock_guard<std::mutex> lock(stamps_mutex_);
-  last_integrated_[header.frame_id] = header.stamp;
 }
 
 const char* MapperNodeletBase::tfDropReason(

@@ -16,10 +16,11 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "occupancy_fusion/mapping/map_saving.h"
+#include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/file_readers.h"
 #include "occupancy_fusion/tools/map_outputs.h"
-#include "occupancy_fusion/tools/recording_mapper.h"
 #include "occupancy_fusion/tools/rosbag_reader.h"
 #include "occupancy_fusion/tools/tool_main.h"
 #include "occupancy_fusion/tools/voxel_picture.h"
@@ -32,14 +33,17 @@ const char* const kUsage =
     R"(usage: offline_mapper --config FILE.yaml --output-dir DIR INPUT... [options]
 
 Maps recorded sensor data (no ROS master needed) into one map: a 3D voxel map (point clouds,
-depth images, disparity images) and a 2D laser layer (laser scans), as the mapper nodelets do
-online. Writes DIR/NAME.bt, .ot (OctoMap), .pcd (every known voxel with its occupancy
+depth images, disparity images) and a 2D laser layer (laser scans) by the mapper nodelets' own
+message conversions and mapping rules, so a bag gives the map the nodelets build from it live.
+Writes DIR/NAME.ot, .bt (OctoMap), .pcd (every known voxel with its occupancy
 probability), .pgm + .yaml (map_server files of the fused 2D view: the voxels within
 occupancy_min_z..occupancy_max_z and the laser layer), .npy (per-column log-odds behind the 2D
 view), .png (a picture of the 2D view, y up), .laser.npy + .laser.yaml (the laser layer, which
 the MapServer's load_map resumes with the .ot) and NAME_voxels.png (the occupied voxels in 3D,
-seen obliquely, coloured by height; only when some voxel is occupied). A progress line (frames per
-sensor kind, elapsed time, rate) is printed every two seconds, and a summary at the end.
+seen obliquely, coloured by height; only when some voxel is occupied): the MapServer's ~save_map
+files, written by the same saver, and the rest for inspection; nothing when nothing was mapped.
+A progress line (frames per sensor kind, elapsed time, rate) is printed every two seconds, and a
+summary at the end.
 
 Inputs (at least one; any mix, each repeatable):
   --bag FILE           rosbag; several bags are merged in time order and share their tf.
@@ -159,7 +163,7 @@ Options parseOptions(const CommandLine& line) {
 // rate", so a long run shows how far it is and which sensors it is integrating.
 class ProgressPrinter {
  public:
-  ProgressPrinter(std::size_t total, const RecordingMapper* mapper, bool quiet)
+  ProgressPrinter(std::size_t total, const MappingSession* mapper, bool quiet)
       : total_(total), mapper_(mapper), quiet_(quiet) {}
 
   void operator()(std::size_t done) {
@@ -184,7 +188,7 @@ class ProgressPrinter {
 
  private:
   std::size_t total_;
-  const RecordingMapper* mapper_;
+  const MappingSession* mapper_;
   bool quiet_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_print_ = start_;
@@ -202,8 +206,14 @@ const char* measurementName(const std::string& kind) {
   return "pixels";
 }
 
+// The files written, in order (saveMap's, then the voxel picture), and what saveMap reported.
+struct MapOutputs {
+  std::vector<std::string> files;
+  SavedMapFiles saved;
+};
+
 // One line per sensor kind (frames, skips with their reasons, time per frame).
-void printKinds(const RecordingStatistics& stats, std::ostream& text) {
+void printKinds(const MappingStatistics& stats, std::ostream& text) {
   for (const auto& [kind, kind_stats] : stats.by_kind) {
     text << "  " << kind << ": " << kind_stats.frames << " integrated, " << kind_stats.skipped
          << " skipped, " << kind_stats.millisecondsPerFrame() << " ms per frame, "
@@ -216,8 +226,9 @@ void printKinds(const RecordingStatistics& stats, std::ostream& text) {
 }
 
 void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
-                  const RecordingMapper& mapper, const MapOutputs& outputs, double total_seconds) {
-  const RecordingStatistics& stats = mapper.statistics();
+                  const MappingSession& mapper, const MapOutputs& outputs, double total_seconds) {
+  const SavedMapFiles& saved = outputs.saved;
+  const MappingStatistics& stats = mapper.statistics();
   std::ostringstream text;
   text << std::fixed << std::setprecision(1);
   text << "offline_mapper: summary\n";
@@ -238,21 +249,22 @@ void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
        << std::setprecision(3) << mapper.map().resolution() << " m, " << std::setprecision(1)
        << (mapper.map().memoryBytes() + mapper.laserLayer().memoryBytes()) / (1024.0 * 1024.0)
        << " MiB map memory, " << peakResidentMebibytes() << " MiB peak resident\n";
-  if (outputs.grid_width == 0) {
+  if (saved.grid_width == 0) {
     text << "  2D view: none, nothing was mapped (no .pgm, .yaml, .npy, .png)\n";
   } else {
-    text << "  2D view: " << outputs.grid_width << " x " << outputs.grid_height << " cells";
+    text << "  2D view: " << saved.grid_width << " x " << saved.grid_height << " cells";
     const FusedGridConfig& band = mapper.config().fused_grid;
     if (std::isinf(band.min_z) && std::isinf(band.max_z) && mapper.map().knownVoxelCount() > 0) {
       text << " (occupancy_min_z/occupancy_max_z unset: every height is projected, floor too)";
     }
     text << "\n";
   }
-  if (outputs.octomap_skipped_voxels > 0) {
-    text << "  warning: " << outputs.octomap_skipped_voxels
+  if (saved.octomap_skipped_voxels > 0) {
+    text << "  warning: " << saved.octomap_skipped_voxels
          << " voxels lie outside OctoMap's key range and are not in the .bt/.ot\n";
   }
   text << "  wrote:";
+  if (outputs.files.empty()) text << " nothing (a map with nothing known is not saved)";
   for (const std::string& path : outputs.files) text << " " << path;
   std::cout << text.str() << "\n";
 }
@@ -302,7 +314,7 @@ void writeVoxelPicture(const VoxelMap& map, const Options& options, MapOutputs* 
 struct Setup {
   Options options;
   std::unique_ptr<YamlParameterSource> parameters;
-  RecordingMapperConfig config;
+  MappingSessionConfig config;
   std::vector<std::unique_ptr<InputReader>> readers;
 };
 
@@ -340,7 +352,7 @@ Setup prepare(int argc, char** argv) {
     for (const std::string& assignment : setup.options.overrides) {
       setup.parameters->addOverride(assignment);
     }
-    setup.config = readRecordingMapperConfig(*setup.parameters);
+    setup.config = readMappingSessionConfig(*setup.parameters);
   } catch (const std::invalid_argument& error) {
     throw UsageError(std::string("bad parameters: ") + error.what());
   }
@@ -382,7 +394,7 @@ bool writeSingleScan(const Setup& setup, const ScanPicker& picker) {
 }
 
 // --load-map: a file that cannot be resumed is a bad input file (exit 2), not a mapping failure.
-void resume(const std::string& path, RecordingMapper* mapper) {
+void resume(const std::string& path, MappingSession* mapper) {
   ResumedMap resumed;
   try {
     resumed = mapper->resumeFrom(path);
@@ -399,7 +411,7 @@ int run(int argc, char** argv) {
   Setup setup = prepare(argc, argv);
   std::size_t total_frames = 0;
   for (const auto& reader : setup.readers) total_frames += reader->frameCount();
-  RecordingMapper mapper(setup.config, nullptr, &std::cerr);
+  MappingSession mapper(setup.config, nullptr, &std::cerr);
   if (!setup.options.load_map.empty()) resume(setup.options.load_map, &mapper);
   ProgressPrinter progress(total_frames, &mapper, setup.options.quiet);
   ScanPicker picker(&mapper, setup.options.single_scan);
@@ -410,7 +422,16 @@ int run(int argc, char** argv) {
     reader->read(&picker, [&](std::size_t done) { progress(frames_before + done); });
     frames_before += reader->frameCount();
   }
-  MapOutputs outputs = writeMapOutputs(mapper, setup.options.output_dir, setup.options.name);
+  MapOutputs outputs;
+  if (mapper.map().knownVoxelCount() > 0 || mapper.laserLayer().knownCellCount() > 0) {
+    MapSaveOptions save;
+    save.band = mapper.config().fused_grid;
+    save.inspection_files = true;
+    outputs.saved =
+        saveMap(mapper.map(), mapper.laserLayer(),
+                (std::filesystem::path(setup.options.output_dir) / setup.options.name).string(),
+                save, &outputs.files);
+  }
   writeVoxelPicture(mapper.map(), setup.options, &outputs);
   printSummary(setup.readers, mapper, outputs, progress.elapsedSeconds());
   for (const std::string& key : setup.parameters->unreadOverrides()) {

@@ -367,7 +367,9 @@ TEST(SimDepthMapping, BadFramesLeaveTheMapUnchanged) {
   sensor_msgs::CameraInfo wrong_size = *info;
   wrong_size.width = info->width / 2;
   sendFrame(info_pub, image_pub, wrong_size, flatDepthImage(*info, 1.0f, ros::Time::now()));
+  // Neither P (the rectified image's, the one the rule reads where set) nor K has fx.
   sensor_msgs::CameraInfo no_focal_length = *info;
+  no_focal_length.P[0] = 0.0;
   no_focal_length.K[0] = 0.0;
   sendFrame(info_pub, image_pub, no_focal_length, flatDepthImage(*info, 1.0f, ros::Time::now()));
 

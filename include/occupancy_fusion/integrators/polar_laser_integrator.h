@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "occupancy_fusion/integrators/laser/laser_sensor_model.h"
@@ -93,6 +94,11 @@ class LocalLaserGrid {
 
   // Adds a scanner fixed at `sensor_in_vehicle`; returns its id (0, 1, ...).
   int addScanner(const Pose2D& sensor_in_vehicle);
+  // The same for a scanner with settings of its own (sensor model, method): it gets its own
+  // integrator.
+  int addScanner(const Pose2D& sensor_in_vehicle, const PolarLaserIntegratorConfig& integrator);
+  // A scanner remounted: later cycles place its scans at `sensor_in_vehicle`.
+  void moveScanner(int scanner, const Pose2D& sensor_in_vehicle);
   int scannerCount() const { return static_cast<int>(scanners_.size()); }
 
   void clear();                                  // every cell unknown (NaN)
@@ -107,6 +113,8 @@ class LocalLaserGrid {
   PolarLaserIntegratorConfig integrator_config_;
   PolarLaserIntegrator integrator_;
   std::vector<Pose2D> scanners_;
+  // Per scanner: its own integrator, or null for the shared one.
+  std::vector<std::unique_ptr<PolarLaserIntegrator>> own_integrators_;
   LogOddsRaster grid_;
 };
 

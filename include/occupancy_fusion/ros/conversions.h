@@ -1,4 +1,5 @@
-// Conversions between ROS messages and the core's plain types, used by the nodelets.
+// Conversions between ROS messages and the core's plain types, used by the nodelets and
+// offline_mapper's bag reader.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -8,10 +9,17 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/time.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_msgs/Header.h>
 
 #include "occupancy_fusion/map/fused_grid.h"
+#include "occupancy_fusion/mapping/frames.h"
 
 namespace occupancy_fusion {
+
+// The mapping session's header of a message of sensor `kind` ("point_cloud", "depth", "disparity",
+// "laser") from `source` (its topic): the message's frame_id and stamp.
+FrameHeader frameHeaderOf(const std_msgs::Header& header, const std::string& kind,
+                          const std::string& source);
 
 // Every point of the cloud (x, y, z of type FLOAT32 or FLOAT64), mapped by target_T_cloud.
 // Non-finite points are kept: the integrators skip and count them. Throws std::invalid_argument

@@ -1,8 +1,8 @@
 // sensor_msgs/Image depth images and their sensor_msgs/CameraInfo to the core's DepthImageView +
-// CameraIntrinsics (DepthMapper). What is wrong with a frame is named in the exception, and its
-// reason kept, so the mapper counts drops by reason. Bad pixels are no reason to drop a frame:
-// NaN, +-inf, 0 and negative depths (and 0 mm) pass through, and the integrator skips them as
-// "no measurement".
+// CameraIntrinsics: the one conversion of the DepthMapper nodelet and offline_mapper's bag reader.
+// What is wrong with a frame is named in the exception, and its reason kept, so the mapper counts
+// drops by reason. Bad pixels are no reason to drop a frame: NaN, +-inf, 0 and negative depths (and
+// 0 mm) pass through, and the integrator skips them as "no measurement".
 #pragma once
 
 #include <stdexcept>
@@ -35,10 +35,13 @@ class DepthImageRejected : public std::invalid_argument {
 // size too small for the image.
 DepthImageView depthInMetres(const sensor_msgs::Image& image, std::vector<float>* storage);
 
-// Intrinsics from K of a camera_info that must describe this very image. Throws
-// DepthImageRejected (kCameraInfo) when its size differs from the image's, for binning or a
-// region of interest, for a focal length that is not positive, and for intrinsics that fail
-// CameraIntrinsics::validate().
+// True for the encodings depthInMetres reads: 16UC1 / mono16 (mm) and 32FC1 (m).
+bool isDepthEncoding(const std::string& encoding);
+
+// The intrinsics of a camera_info that must describe this very image, by intrinsicsOf's rule (P
+// where set, else K; camera_info_message.h). Throws DepthImageRejected (kCameraInfo) when its
+// size (after binning) differs from the image's, and for whatever intrinsicsOf rejects (a region
+// of interest, a focal length that is not positive, invalid intrinsics).
 CameraIntrinsics depthCameraIntrinsics(const sensor_msgs::CameraInfo& info,
                                        const sensor_msgs::Image& image);
 

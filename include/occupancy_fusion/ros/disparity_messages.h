@@ -1,5 +1,6 @@
 // stereo_msgs/DisparityImage and the left camera's sensor_msgs/CameraInfo to the core's
-// DisparityImageView + StereoCamera (DisparityMapper), and back (the simulated stereo camera).
+// DisparityImageView + StereoCamera: the one conversion of the DisparityMapper nodelet and
+// offline_mapper's bag reader; and back (the simulated stereo camera).
 #pragma once
 
 #include <string>
@@ -21,10 +22,11 @@ namespace occupancy_fusion {
 std::vector<float> validDisparities(const stereo_msgs::DisparityImage& message);
 
 // The stereo camera of a disparity image: fx = f and baseline = T from the message (they
-// describe the disparity image itself); fy, cx, cy from the left camera_info's rectified
-// projection matrix P (K when P is unset), divided by its binning. Throws std::invalid_argument
-// when the camera_info's image size (after binning) differs from the disparity image's, or when
-// the result is not a valid camera (f, T or fy not positive).
+// describe the disparity image itself); fy, cx, cy from the left camera_info by intrinsicsOf's
+// rule (P where set, else K, divided by the binning; camera_info_message.h). Throws
+// std::invalid_argument when the camera_info's image size (after binning) differs from the
+// disparity image's, for what intrinsicsOf rejects, or when the result is not a valid camera (f,
+// T or fy not positive).
 StereoCamera stereoCameraOf(const stereo_msgs::DisparityImage& message,
                             const sensor_msgs::CameraInfo& left_info);
 

@@ -33,16 +33,9 @@ struct MapPublisherConfig {
 // publish_rate, save_prefix, occupancy_min_z, occupancy_max_z.
 MapPublisherConfig readMapPublisherConfig(const ParameterSource& source);
 
-// Saves the map as <prefix>.ot (every log-odds: what MapServer's ~load_map reads back exactly),
-// <prefix>.bt (occupied / free labels, for OctoMap tools), <prefix>.pgm + <prefix>.yaml (the
-// fused 2D grid, map_server's format) and <prefix>.laser.npy + <prefix>.laser.yaml (the 2D laser
-// layer's log-odds, which load_map resumes with the .ot; see layer_files.h). Everything is computed
-// before the first file is written and every file is written atomically (temporary file, then
-// rename), so each file on disk is either its previous version or the complete new one. Safe while
-// mappers write (reads take the map's shared lock). Throws std::runtime_error naming the path, or
-// naming the reason when nothing could be written (an empty map); the files completed before a
-// failure are appended to *written. `lock_statistics`, if given, records how long each read of the
-// map took.
+// Saves a shared map with saveMap (mapping/map_saving.h: the files, what is written when, and
+// the errors), in the height band `grid`, warning about voxels OctoMap's keys cannot hold.
+// `lock_statistics`, if given, records how long each read of the map took.
 class MapLockStatistics;
 void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
                   std::vector<std::string>* written, MapLockStatistics* lock_statistics = nullptr);

@@ -1,11 +1,13 @@
 // What the mapper nodelets (point cloud, depth, disparity, laser) share, so that each keeps only
-// its input, its conversion and its core call: the shared map and the parameters every mapper
-// reads (the map's, ~queue_size, ~publish_map), the MapPublisher of a mapper that runs alone, the
-// tf2 buffer with the message filters that hold inputs back until their pose is known, and the
-// 1 Hz diagnostics task with the input statistics every mapper reports alike (FrameStatistics:
-// frames received and their rate, integrated and the time each took, dropped by reason, tf
-// failures), counted here: every frame that enters a transform filter is received, a message
-// callback that returns true has integrated it, every other outcome is a drop with a reason.
+// its input, its conversion and its frame: the shared map and the parameters every mapper reads
+// (the map's, ~queue_size, ~publish_map), the mapping session over the shared map that applies
+// the rules offline_mapper applies too (mapping/mapping_session.h: duplicate stamps, poses,
+// laser sources, drops), the MapPublisher of a mapper that runs alone, the tf2 buffer with the
+// message filters that hold inputs back until their pose is known, and the 1 Hz diagnostics task
+// with the input statistics every mapper reports alike (FrameStatistics: frames received and
+// their rate, integrated and the time each took, dropped by reason, tf failures), counted here:
+// every frame that enters a transform filter is received, a message callback that returns true
+// has integrated it, every other outcome is a drop with a reason.
 #pragma once
 
 #include <chrono>
@@ -26,6 +28,7 @@
 #include <tf2_ros/transform_listener.h>
 #include <Eigen/Geometry>
 
+#include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/params/parameter_source.h"
 #include "occupancy_fusion/ros/frame_statistics.h"
 #include "occupancy_fusion/ros/map_publisher.h"
@@ -47,6 +50,26 @@ class MapperNodeletBase : public nodelet::Nodelet {
   // drop a frame (besides the tf ones), reported from the start.
   void startDiagnostics(const std::string& task_name, const std::vector<std::string>& drop_reasons,
                         DiagnosticsTask fill);
+
+  // The mapping session over the shared map, for `config`'s integrator settings (its frame_id and
+  // map are the shared map's). Call it from setUpMapper's read_mapper_config.
+  void startSession(MappingSessionConfig config);
+  const MappingSession& session() const { return *session_; }
+
+  // Integrates a frame (its pose looked up with poseInMap) through the session; a drop is counted
+  // by the session's reason and warned about (throttled), naming `what`. Whether it integrated.
+  template <class Frame>
+  bool integrateFrame(const Frame& frame, const std::string& what) {
+    FrameOutcome outcome;
+    {
+      const std::lock_guard<std::mutex> lock(session_mutex_);
+      outcome = session_->integrate(frame);
+    }
+    if (outcome.integrated) return true;
+    frames_.countDropped(outcome.drop);
+    NODELET_WARN_THROTTLE(5.0, "%s dropped: %s", what.c_str(), outcome.detail.c_str());
+    return false;
+  }
 
   // A frame that passed the transform filter and was not integrated, for `reason`.
   void countDropped(const std::string& reason) { frames_.countDropped(reason); }
@@ -75,9 +98,7 @@ class MapperNodeletBase : public nodelet::Nodelet {
     filter->registerCallback(
         [this, on_message = std::move(on_message)](const typename Message::ConstPtr& message) {
           const auto start = std::chrono::steady_clock::now();
-          if (isDuplicate(message->header)) return;
           if (!on_message(*message)) return;
-          noteIntegratedStamp(message->header);
           frames_.countIntegrated(
               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                   .count());
@@ -105,33 +126,26 @@ class MapperNodeletBase : public nodelet::Nodelet {
         });
   }
 
-  // The pose of the message's frame in the map frame at its stamp. Without one, the message is
-  // counted as dropped (a tf failure), warned about (throttled) and nullopt returned. A template
-  // so that each mapper keeps its own throttled warning.
+  // The pose of `sensor_frame` (by default the message's frame) in `frame` (by default the map
+  // frame) at the message's exact stamp, for the frame's T_map_sensor: the session then checks it
+  // (a pose that is not finite is dropped there). Without one, the message is counted as dropped
+  // (a tf failure), warned about (throttled) and nullopt returned. A template so that each mapper
+  // keeps its own throttled warning.
   template <class Message>
-  std::optional<Eigen::Isometry3d> poseInMap(const Message& message, const std::string& what) {
-    Eigen::Isometry3d pose;
+  std::optional<Eigen::Isometry3d> poseInMap(const Message& message, const std::string& what,
+                                             const std::string& sensor_frame = "",
+                                             const std::string& frame = "") {
     try {
-      pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
-          map_->frameId(), message.header.frame_id, message.header.stamp));
+      return tf2::transformToEigen(tf_buffer_->lookupTransform(
+          frame.empty() ? map_->frameId() : frame,
+          sensor_frame.empty() ? message.header.frame_id : sensor_frame, message.header.stamp));
     } catch (const tf2::TransformException& error) {
       frames_.countDropped(FrameStatistics::kTfLookup);
       NODELET_WARN_THROTTLE(5.0, "%s dropped: %s", what.c_str(), error.what());
       return std::nullopt;
     }
-    // tf2 refuses NaN transforms itself; this guards the integrators should one get through.
-    if (!pose.matrix().allFinite()) {
-      frames_.countDropped(kPoseNotFinite);
-      NODELET_WARN_THROTTLE(5.0, "%s dropped: pose of '%s' in '%s' is not finite", what.c_str(),
-                            message.header.frame_id.c_str(), map_->frameId().c_str());
-      return std::nullopt;
-    }
-    return pose;
   }
 
-  // Drop reasons every mapper has besides the tf ones.
-  static constexpr const char* kDuplicateStamp = "duplicate stamp";
-  static constexpr const char* kPoseNotFinite = "pose not finite";
   // A sensor's stamp going back by more than this is a jump back in time (a looped bag), not
   // reordering.
   static constexpr double kBackwardsJumpSeconds = 1.0;
@@ -146,12 +160,6 @@ class MapperNodeletBase : public nodelet::Nodelet {
   // back): the tf buffer, which would refuse the older transforms, is cleared and mapping goes
   // on.
   void noteReceivedStamp(const std_msgs::Header& header);
-  // A frame stamped exactly like the last one integrated from the same frame_id (a republished
-  // or duplicated message) is dropped, counted and warned about: integrating it would count the
-  // same evidence twice.
-  bool isDuplicate(const std_msgs::Header& header);
-  void noteIntegratedStamp(const std_msgs::Header& header);
-
   static const char* tfDropReason(tf2_ros::filter_failure_reasons::FilterFailureReason reason);
 
   std::shared_ptr<SharedMap> map_;
@@ -161,9 +169,12 @@ class MapperNodeletBase : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   FrameStatistics frames_;
+  // The nodelet's callbacks run on its one-threaded queue; the lock keeps the session safe should
+  // a mapper ever take a multi-threaded one.
+  std::mutex session_mutex_;
+  std::unique_ptr<MappingSession> session_;
   std::mutex stamps_mutex_;
   std::map<std::string, ros::Time> newest_received_;  // per frame_id
-  std::map<std::string, ros::Time> last_integrated_;  // per frame_id
   std::size_t backwards_jumps_ = 0;                   // guarded by stamps_mutex_
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;

@@ -1,40 +1,13 @@
-// The files offline_mapper writes for one mapped recording.
+// offline_mapper's --single-scan files: one laser scan's grid as Yguel et al.'s Table I
+// evaluates it. (The map's own files are saveMap's, mapping/map_saving.h.)
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "occupancy_fusion/integrators/polar_laser_integrator.h"
-#include "occupancy_fusion/map/fused_grid.h"
-#include "occupancy_fusion/map/grid_layer_2d.h"
-#include "occupancy_fusion/map/voxel_map.h"
-#include "occupancy_fusion/tools/recording_mapper.h"
 
 namespace occupancy_fusion {
-
-// The log-odds behind the fused 2D view, cell for cell over the same window as `grid` (the
-// result of projectToRaster with the same inputs): per column, the largest log-odds among the
-// known voxels whose centres lie in config's height band and the known layer cells overlapping
-// it; NaN where none is known. Classifying it with the model's threshold gives the fused view
-// exactly (its rule "occupied wins, then free" is a maximum). Columns are the map's
-// resolution; the layer must have the same resolution (offline_mapper's laser layer does).
-LogOddsRaster fusedLogOdds(const VoxelMap& map, const GridLayer2D* layer,
-                           const FusedGridConfig& config, const OccupancyRaster& grid);
-
-struct MapOutputs {
-  std::vector<std::string> files;  // every file written, in order
-  int grid_width = 0;              // cells of the fused 2D view (0: nothing known, no 2D files)
-  int grid_height = 0;
-  std::size_t octomap_skipped_voxels = 0;  // outside OctoMap's key range, not in .bt/.ot
-};
-
-// Writes dir/name.bt and .ot (OctoMap), .pcd (every known voxel: centre and probability),
-// .laser.npy + .laser.yaml (the laser layer, which the MapServer's load_map resumes with the .ot),
-// .pgm + .yaml (map_server files of the fused 2D view), .npy (fusedLogOdds, float32, row 0 = the
-// lowest y) and .png (the 2D view, y up). With nothing known there is no 2D view: the 2D files
-// are left out. Throws std::runtime_error naming a file that cannot be written.
-MapOutputs writeMapOutputs(const RecordingMapper& mapper, const std::string& dir,
-                           const std::string& name);
 
 // The grid of one laser scan in the sensor-centred frame, as Yguel et al.'s Table I evaluates
 // it: `length` x `depth` metres of `resolution` cells, the sensor at the middle of the grid's

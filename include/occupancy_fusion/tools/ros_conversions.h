@@ -1,4 +1,6 @@
-// Conversions between ROS messages and the core's plain types, for the tools.
+// Messages the tools write (simulated recordings), and the bag reader's fallback for a disparity
+// topic without camera_info. Reading sensor messages is ros/*_messages.h's, shared with the
+// nodelets.
 #pragma once
 
 #include <Eigen/Core>
@@ -22,40 +24,13 @@
 
 namespace occupancy_fusion {
 
-// x, y, z of every point with finite coordinates. Accepts FLOAT32 or FLOAT64 x/y/z fields;
-// throws std::invalid_argument naming the message's frame when they are missing or of another
-// type.
-std::vector<Eigen::Vector3f> pointsFromCloud(const sensor_msgs::PointCloud2& cloud);
-
 // An unorganised (height 1) cloud with FLOAT32 x, y, z fields.
 sensor_msgs::PointCloud2 cloudFromPoints(const std::vector<Eigen::Vector3f>& points,
                                          const std::string& frame_id, const ros::Time& stamp);
 
-// True for the encodings depthFromImage reads: 16UC1 / mono16 (mm) and 32FC1 (m).
-bool isDepthEncoding(const std::string& encoding);
-
-// Row-major z-depth in metres of a depth image (16UC1 or mono16 in millimetres, 32FC1 in
-// metres; 0 and NaN stay "no measurement"), either byte order. Throws std::invalid_argument
-// naming the encoding or the size when it cannot be read.
-std::vector<float> depthFromImage(const sensor_msgs::Image& image);
-
-// Intrinsics of a rectified image: P's fx, fy, cx, cy where P is set (the projection of the
-// rectified image, what depth_image_proc uses), else K's. Throws std::invalid_argument for a
-// zero focal length or for binning / a region of interest (not supported).
-CameraIntrinsics intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info);
-
-// Disparity in pixels of a stereo_msgs/DisparityImage (32FC1), NaN where the value lies outside
-// [min_disparity, max_disparity] or is not finite (stereo_image_proc writes unmatched pixels
-// below min_disparity). Throws std::invalid_argument for another encoding or a short buffer.
-std::vector<float> disparityFromMessage(const stereo_msgs::DisparityImage& message);
-
-// The stereo camera of a DisparityImage: f and T from it, the principal point (and fy, scaled
-// to f) from the left camera's info.
-StereoCamera stereoCameraFrom(const stereo_msgs::DisparityImage& message,
-                              const sensor_msgs::CameraInfo& left_info);
-
-// The same without camera_info: principal point at the image centre ((width - 1) / 2,
-// (height - 1) / 2), fy = f.
+// The stereo camera of a DisparityImage recorded without camera_info (stereoCameraOf in
+// ros/disparity_messages.h is the rule with one): f and T from the message, the principal point
+// at the image centre ((width - 1) / 2, (height - 1) / 2), fy = f.
 StereoCamera stereoCameraAtImageCentre(const stereo_msgs::DisparityImage& message);
 
 // Messages for simulated recordings (cameraInfoMessage: ros/camera_info_message.h).

@@ -15,6 +15,9 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "occupancy_fusion/ros/conversions.h"
+#include "occupancy_fusion/ros/depth_messages.h"
+#include "occupancy_fusion/ros/disparity_messages.h"
 #include "occupancy_fusion/tools/ros_conversions.h"
 
 namespace occupancy_fusion {
@@ -83,12 +86,7 @@ bool carriesDepth(const std::vector<const rosbag::Bag*>& bags, const std::string
 
 FrameHeader headerOf(const rosbag::MessageInstance& message, const std::string& kind,
                      const std_msgs::Header& header) {
-  FrameHeader frame;
-  frame.kind = kind;
-  frame.source = message.getTopic();
-  frame.frame_id = header.frame_id;
-  frame.stamp = header.stamp.toSec();
-  return frame;
+  return frameHeaderOf(header, kind, message.getTopic());
 }
 
 }  // namespace
@@ -305,7 +303,8 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
     PointCloudFrame frame;
     frame.header = headerOf(message, "point_cloud", cloud->header);
     try {
-      frame.points = pointsFromCloud(*cloud);
+      // The nodelets' conversion, in the sensor frame: the mapping session places the points.
+      frame.points = transformedPoints(*cloud, Eigen::Isometry3d::Identity());
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());
       return;
@@ -321,8 +320,21 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
         nearestCameraInfo(depthInfoTopics(topic), frame.header.stamp, &why);
     try {
       if (info == nullptr) throw std::invalid_argument(why);
-      frame.depth = depthFromImage(*image);
-      frame.camera = intrinsicsFromCameraInfo(*info);
+      std::vector<float> storage;
+      const DepthImageView view = depthInMetres(*image, &storage);
+      frame.camera = depthCameraIntrinsics(*info, *image);
+      // The frame owns its pixels (a consumer may keep it): a dense copy where the view points
+      // into the message.
+      if (view.depth == storage.data()) {
+        frame.depth = std::move(storage);
+      } else {
+        frame.depth.resize(static_cast<std::size_t>(view.width) * view.height);
+        for (int v = 0; v < view.height; ++v) {
+          for (int u = 0; u < view.width; ++u) {
+            frame.depth[static_cast<std::size_t>(v) * view.width + u] = view.at(u, v);
+          }
+        }
+      }
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());
       return;
@@ -338,10 +350,10 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
     const sensor_msgs::CameraInfo* info =
         nearestCameraInfo(disparityInfoTopics(topic), frame.header.stamp, &why);
     try {
-      frame.disparity = disparityFromMessage(*disparity);
+      frame.disparity = validDisparities(*disparity);
       frame.width = static_cast<int>(disparity->image.width);
       frame.height = static_cast<int>(disparity->image.height);
-      frame.camera = info != nullptr ? stereoCameraFrom(*disparity, *info)
+      frame.camera = info != nullptr ? stereoCameraOf(*disparity, *info)
                                      : stereoCameraAtImageCentre(*disparity);
     } catch (const std::invalid_argument& error) {
       consumer->onUnreadable(frame.header, error.what());

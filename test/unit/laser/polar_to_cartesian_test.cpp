@@ -334,6 +334,44 @@ TEST(LocalLaserGrid, FusesScannersEachCycleWithCachedOverlays) {
   EXPECT_THROW(grid.fuse({a.scan}), std::invalid_argument);
 }
 
+// Scanners with settings of their own (the LaserMapper's sources): each scan goes through its
+// scanner's integrator; a remounted scanner's scans land at its new pose.
+TEST(LocalLaserGrid, ScannersWithTheirOwnSettingsAndRemounted) {
+  const RoomCase a;
+  PolarLaserIntegratorConfig exact;
+  exact.method = PolarToCartesianMethod::kExact;
+  PolarLaserIntegratorConfig lines;
+  lines.method = PolarToCartesianMethod::kLines;
+  LocalLaserGridConfig grid_config;
+  grid_config.size_x = 9.0;
+  grid_config.size_y = 7.0;
+  LocalLaserGrid grid(grid_config, PolarLaserIntegratorConfig());
+  const int first = grid.addScanner(a.sensor, exact);
+  const int second = grid.addScanner({-1.0, 0.5, 2.5}, lines);
+  const auto expect = [&](const Pose2D& second_pose) {
+    LogOddsRaster expected = emptyRaster(CellIndex(-90, -70), 180, 140, 0.05);
+    PolarLaserIntegrator(exact).integrate(a.scan, a.sensor, &expected);
+    PolarLaserIntegrator(lines).integrate(a.scan, second_pose, &expected);
+    return expected;
+  };
+  const auto same = [](const LogOddsRaster& fused, const LogOddsRaster& expected) {
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < fused.data.size(); ++i) {
+      const float x = fused.data[i], y = expected.data[i];
+      differing += std::isnan(x) != std::isnan(y) || (!std::isnan(x) && x != y) ? 1 : 0;
+    }
+    return differing;
+  };
+  EXPECT_EQ(same(grid.fuse({a.scan, a.scan}), expect({-1.0, 0.5, 2.5})), 0u);
+  grid.moveScanner(second, {0.5, -0.5, 1.0});
+  const LogOddsRaster& moved = grid.fuse({a.scan, a.scan});
+  EXPECT_EQ(same(moved, expect({0.5, -0.5, 1.0})), 0u);
+  // The test can fail: the old pose's grid differs.
+  EXPECT_GT(same(moved, expect({-1.0, 0.5, 2.5})), 100u);
+  EXPECT_EQ(first, 0);
+  EXPECT_THROW(grid.moveScanner(2, a.sensor), std::invalid_argument);
+}
+
 TEST(PolarLaserIntegrator, AccumulatesIntoWorldLayer) {
   const RoomCase room;
   GridLayer2D layer{GridLayer2DConfig()};

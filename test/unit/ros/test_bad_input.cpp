@@ -233,6 +233,67 @@ TEST(BadDisparityInput, BadBaselineFocalLengthSizeOrEncodingIsRejectedNamingIt) 
             std::string::npos);
 }
 
+// ---- camera_info and validity: the rules the nodelets and the bag reader share ---------------
+
+TEST(CameraInfoRule, ProjectionWhereSetElseKBinningDividesRegionOfInterestRejected) {
+  const sensor_msgs::Image image = floatImage(wallWithBadBlock(2.0f), "32FC1");
+  sensor_msgs::CameraInfo info = cameraInfo(kWidth, kHeight, 30.0);  // P unset: K's
+  EXPECT_DOUBLE_EQ(depthCameraIntrinsics(info, image).fx, 30.0);
+  EXPECT_DOUBLE_EQ(depthCameraIntrinsics(info, image).cx, 15.5);
+  // A rectified camera: P differs from K, and the image is P's.
+  info.P = {28.0, 0.0, 14.0, 0.0, 0.0, 29.0, 11.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  const CameraIntrinsics depth = depthCameraIntrinsics(info, image);
+  EXPECT_DOUBLE_EQ(depth.fx, 28.0);
+  EXPECT_DOUBLE_EQ(depth.fy, 29.0);
+  EXPECT_DOUBLE_EQ(depth.cx, 14.0);
+  EXPECT_DOUBLE_EQ(depth.cy, 11.0);
+  // The disparity image keeps its own f and T; the rest is the same rule's.
+  const StereoCamera stereo = stereoCameraOf(disparityMessage(kNaN), info);
+  EXPECT_DOUBLE_EQ(stereo.fx, kStereoFocal);
+  EXPECT_DOUBLE_EQ(stereo.fy, 29.0);
+  EXPECT_DOUBLE_EQ(stereo.cx, 14.0);
+  EXPECT_DOUBLE_EQ(stereo.cy, 11.0);
+  // A camera_info of the full sensor binned 2 x 2 describes the half-size image.
+  sensor_msgs::CameraInfo binned = info;
+  binned.width = 2 * kWidth;
+  binned.height = 2 * kHeight;
+  binned.binning_x = binned.binning_y = 2;
+  binned.P = {56.0, 0.0, 28.0, 0.0, 0.0, 58.0, 22.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  const CameraIntrinsics half = depthCameraIntrinsics(binned, image);
+  EXPECT_EQ(half.width, kWidth);
+  EXPECT_DOUBLE_EQ(half.fx, 28.0);
+  EXPECT_DOUBLE_EQ(half.cy, 11.0);
+  EXPECT_DOUBLE_EQ(stereoCameraOf(disparityMessage(kNaN), binned).fy, 29.0);
+  sensor_msgs::CameraInfo roi = info;
+  roi.roi.width = 10;
+  roi.roi.height = 10;
+  EXPECT_THROW(depthCameraIntrinsics(roi, image), DepthImageRejected);
+  EXPECT_THROW(stereoCameraOf(disparityMessage(kNaN), roi), std::invalid_argument);
+}
+
+TEST(DisparityValidity, OutsideTheValidWindowIsNoMatchAndAnUnsetMaximumBoundsNothing) {
+  // A block at 1 m (60 px) inside a wall at 2 m (30 px): both above the unset maximum.
+  stereo_msgs::DisparityImage message = disparityMessage(60.0f);
+  message.min_disparity = 0.0f;
+  message.max_disparity = 0.0f;  // not filled in
+  message.valid_window.x_offset = 4;
+  message.valid_window.y_offset = 2;
+  message.valid_window.width = 20;
+  message.valid_window.height = 18;
+  const std::vector<float> disparity = validDisparities(message);
+  const float wall = static_cast<float>(kStereoFocal * kStereoBaseline / 2.0);
+  EXPECT_FLOAT_EQ(disparity[2 * kWidth + 4], wall);      // first pixel inside
+  EXPECT_FLOAT_EQ(disparity[19 * kWidth + 23], wall);    // last pixel inside
+  EXPECT_FLOAT_EQ(disparity[10 * kWidth + 15], 60.0f);   // the block
+  EXPECT_TRUE(std::isnan(disparity[2 * kWidth + 3]));    // left of the window
+  EXPECT_TRUE(std::isnan(disparity[1 * kWidth + 4]));    // above it
+  EXPECT_TRUE(std::isnan(disparity[19 * kWidth + 24]));  // right of it
+  EXPECT_TRUE(std::isnan(disparity[20 * kWidth + 23]));  // below it
+  std::size_t valid = 0;
+  for (const float d : disparity) valid += std::isnan(d) ? 0 : 1;
+  EXPECT_EQ(valid, 20u * 18u);
+}
+
 // ---- laser scans ----------------------------------------------------------------------------
 
 sensor_msgs::LaserScan scanMessage(int beams) {

@@ -277,8 +277,8 @@ TEST_F(InputKindsTest, BadFramesInABagAreSkippedAndCounted) {
   EXPECT_NE(result.out.find("laser: " + std::to_string(2 * kFrames) + " integrated, 1 skipped"),
             std::string::npos)
       << result.out;
-  EXPECT_NE(result.out.find("skipped 1: unreadable message on /camera/depth/image (first: depth "
-                            "image encoding 'rgb8' is not supported"),
+  EXPECT_NE(result.out.find("skipped 1: unreadable message on /camera/depth/image (first: "
+                            "encoding 'rgb8' is not a depth encoding"),
             std::string::npos)
       << result.out;
   EXPECT_NE(result.out.find("skipped 1: no transform from 'unmounted_laser' to 'map'"),
