@@ -22,32 +22,38 @@ struct CellResult {
   double table_i_best_coverage = 0.0;  // Table I's coverage at its best frame
 };
 
-CellResult runCell(const std::string& motion) {
+// reference_coverage: what the OctoMap mode covers at least from the 5th frame on (it maps every
+// end point at once, but half input's rays leave gaps between them at fine voxels).
+CellResult runCell(const std::string& motion, double resolution = kResolution, int frames = 20,
+                   InputResolution input = InputResolution::kFull,
+                   double reference_coverage = 0.9) {
   StereoMotionSetup setup;
   setup.motion = stereoMotionCaseFromName(motion);
-  setup.frames = 20;
+  setup.frames = frames;
   const sim::Scene scene = setup.scene();
   const StereoRecording recording = renderStereoRecording(scene, setup);
-  StereoGroundTruth truth(scene, recording, kResolution);
-  const VisibilityStereoConfig measured = visibilityStereoConfigFor(StereoParameterSet::kMeasured);
+  StereoGroundTruth truth(scene, recording, resolution);
+  VisibilityStereoConfig measured = visibilityStereoConfigFor(StereoParameterSet::kMeasured);
+  measured.disparity.input_resolution = input;
   VisibilityStereoConfig octomap = measured;
   octomap.method = StereoIntegrationMethod::kOctomap;
-  const StereoRunCurve ours = mapStereoRecording(measured, recording, kResolution, &truth);
-  const StereoRunCurve reference = mapStereoRecording(octomap, recording, kResolution, &truth);
-  const StereoRunCurve table_i =
-      mapStereoRecording(VisibilityStereoConfig(), recording, kResolution, &truth);
+  VisibilityStereoConfig table_i;
+  table_i.disparity.input_resolution = input;
+  const StereoRunCurve ours = mapStereoRecording(measured, recording, resolution, &truth);
+  const StereoRunCurve reference = mapStereoRecording(octomap, recording, resolution, &truth);
+  const StereoRunCurve table_i_run = mapStereoRecording(table_i, recording, resolution, &truth);
   CellResult result;
   for (std::size_t k = kFirstJudgedFrame; k < ours.frames.size(); ++k) {
     const auto& q = ours.frames[k];
     const auto& r = reference.frames[k];
-    EXPECT_GT(r.coverage, 0.9) << "frame " << k + 1;        // OctoMap maps what it sees at once
+    EXPECT_GT(r.coverage, reference_coverage) << "frame " << k + 1;
     EXPECT_GT(r.false_occupied, 20u) << "frame " << k + 1;  // and the patches with it
     result.worst_coverage_ratio = std::min(result.worst_coverage_ratio, q.coverage / r.coverage);
     result.worst_false_ratio =
         std::max(result.worst_false_ratio, static_cast<double>(q.false_occupied) /
                                                std::max<std::size_t>(r.false_occupied, 1));
     result.table_i_best_coverage =
-        std::max(result.table_i_best_coverage, table_i.frames[k].coverage);
+        std::max(result.table_i_best_coverage, table_i_run.frames[k].coverage);
   }
   std::printf(
       "%s: worst coverage ratio %.3f, worst false-occupied ratio %.3f, Table I's best "
@@ -73,6 +79,17 @@ TEST(StereoMotionMatrixTest, StandingCameraIsMappedWithoutTheOctomapModesArtifac
   EXPECT_GE(cell.worst_coverage_ratio, 0.8);
   EXPECT_LE(cell.worst_false_ratio, 0.2);
   EXPECT_LT(cell.table_i_best_coverage, 0.2);
+}
+
+TEST(StereoMotionMatrixTest, FineVoxelsAtHalfInputStayWithinBothGoals) {
+  // The matrix's tightest cell for false-occupied voxels (forward 0.1 m/frame, 0.05 m, half input;
+  // 0.174 of the OctoMap mode's at frame 11 over 40 frames): its first 14 frames. Measured
+  // (Release): coverage ratio >= 0.947, false-occupied ratio <= 0.174. With the measured surface's
+  // sigma allowed to 3 voxels the false-occupied ratio is 0.225 here (0.230 over the 40 frames).
+  const CellResult cell = runCell("forward_0.10", 0.05, 14, InputResolution::kHalf, 0.75);
+  EXPECT_GE(cell.worst_coverage_ratio, 0.9);
+  EXPECT_LE(cell.worst_false_ratio, 0.2);
+  EXPECT_LT(cell.table_i_best_coverage, 0.01);
 }
 
 TEST(StereoMotionMatrixTest, MotionNames) {
