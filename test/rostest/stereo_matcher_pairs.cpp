@@ -124,7 +124,8 @@ class StereoRig {
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& status : array->status) {
-      if (!isTask(status, "disparity mapping")) continue;
+      // Not diagnostic_updater's "Node starting up" placeholder, which has no values.
+      if (!isTask(status, "disparity mapping") || status.values.empty()) continue;
       for (const char* key : {"images integrated", "images dropped (invalid)"}) {
         mapper_counts_[key] = diagnosticCount(status, key);
       }
