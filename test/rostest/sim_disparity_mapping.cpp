@@ -79,6 +79,9 @@ class MapObserver {
       if (!isTask(status, "disparity mapping")) continue;
       std::map<std::string, std::string> values;
       for (const auto& entry : status.values) values[entry.key] = entry.value;
+      // diagnostic_updater first publishes each task as "Node starting up", without values: an
+      // early subscriber gets that status (values.at threw and ended the test node).
+      if (values.count("images integrated") == 0) continue;
       std::lock_guard<std::mutex> lock(mutex_);
       counters_.integrated = std::stoul(values.at("images integrated"));
       counters_.dropped_invalid = std::stoul(values.at("images dropped (invalid)"));

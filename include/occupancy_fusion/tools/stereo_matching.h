@@ -1,9 +1,13 @@
 // Disparity from a rectified image pair with OpenCV's semi-global matcher (StereoSGBM), for the
-// disparity benchmark and the demo recording: real matcher noise, not ground truth.
+// disparity benchmark and the demo recording: real matcher noise, not ground truth. The matching
+// itself is the core's StereoMatcher (sensors/stereo_matcher.h), which the StereoMatcher nodelet
+// runs too; this adds reading the images and the settings these tools have always used.
 #pragma once
 
 #include <string>
 #include <vector>
+
+#include "occupancy_fusion/sensors/stereo_matcher.h"
 
 namespace occupancy_fusion {
 
@@ -11,6 +15,9 @@ struct SgbmSettings {
   int num_disparities = 80;  // px, a multiple of 16
   int block_size = 5;        // px, odd
 };
+
+// The StereoMatcherConfig of these settings, with the choices explained below.
+StereoMatcherConfig sgbmMatcherConfig(const SgbmSettings& settings);
 
 // StereoSGBM on a rectified pair, as float disparity of the left image in px (its 1/16 px fixed
 // point divided out) plus offset_px; unmatched pixels (below minDisparity) become NaN.
