@@ -3,6 +3,8 @@
 // as OpenCV does, rectified by CachedRectification and matched by StereoMatcher with the
 // nodelet's own parameters.
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -12,15 +14,21 @@
 #include <gtest/gtest.h>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
+#include <rosbag/bag.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
 #include <stereo_msgs/DisparityImage.h>
+#include <tf2_msgs/TFMessage.h>
 #include <opencv2/imgproc.hpp>
 
 #include "../unit/stereo/rtabmap_pair.h"
+#include "../unit/test_folder.h"
+#include "occupancy_fusion/SaveMap.h"
+#include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/params/stereo_matcher_config_reader.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
 #include "occupancy_fusion/sensors/stereo_matcher.h"
@@ -167,7 +175,10 @@ stereo_msgs::DisparityImage::ConstPtr matchOnce(const cv::Mat& left, const Camer
   return disparity;
 }
 
-TEST(StereoMatcherPairs, PublishedDisparityEqualsTheCoreMatchersOnTheRtabmapPairs) {
+// Each test has a folder of its own (the map files of the online/offline comparison).
+class StereoMatcherPairs : public TestFolder {};
+
+TEST_F(StereoMatcherPairs, PublishedDisparityEqualsTheCoreMatchersOnTheRtabmapPairs) {
   ASSERT_TRUE(waitUntil([] { return g_rig->connected(); }, 20.0))
       << "the StereoMatcher did not subscribe to the test's inputs";
   const CameraCalibration left_calibration = test::rtabmapCalibration(g_data_dir, "left");
@@ -236,7 +247,99 @@ TEST(StereoMatcherPairs, PublishedDisparityEqualsTheCoreMatchersOnTheRtabmapPair
   EXPECT_EQ(g_rig->mapperCount("images dropped (invalid)"), 0u);
 }
 
-TEST(StereoMatcherPairs, BadPairsAreDroppedAndTheMatcherRunsOn) {
+std::string run(const std::string& command, int* exit_code) {
+  std::string output;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return output;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
+  *exit_code = pclose(pipe);
+  return output;
+}
+
+using VoxelDump = std::map<std::tuple<int, int, int>, float>;
+VoxelDump voxelsOf(const std::string& ot_path, double resolution) {
+  VoxelMapConfig config;
+  config.resolution = resolution;
+  const std::unique_ptr<VoxelMap> map = readOctomapFile(ot_path, config);
+  VoxelDump voxels;
+  map->forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    voxels[{index.x(), index.y(), index.z()}] = log_odds;
+  });
+  return voxels;
+}
+
+// Runs after the two pairs above were matched and mapped, before the sets below (gtest keeps the
+// order of a suite's tests): the
+// map the DisparityMapper built online from the matcher's disparity equals, voxel for voxel,
+// what offline_mapper builds from the same disparity messages, camera_info and pose.
+TEST_F(StereoMatcherPairs, OnlineMapEqualsOfflineMappersOnTheSameDisparity) {
+  ASSERT_TRUE(waitUntil([] { return g_rig->mapperCount("images integrated") >= 2; }, 10.0));
+  SaveMap save;
+  save.request.prefix = path("online");
+  ASSERT_TRUE(ros::service::call("/map_server/save_map", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+
+  // The recording: the pose of stereo.test's static transform, the left camera_info the mapper
+  // read and the two disparity images as the matcher published them.
+  const CameraCalibration left_calibration = test::rtabmapCalibration(g_data_dir, "left");
+  const std::string bag_path = path("matched.bag");
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
+    geometry_msgs::TransformStamped pose;
+    pose.header.frame_id = "map";
+    pose.child_frame_id = kFrame;
+    pose.transform.translation.z = 1.0;
+    // static_transform_publisher's yaw -pi/2, pitch 0, roll -pi/2: optical z along map x.
+    const Eigen::Quaterniond q = Eigen::AngleAxisd(-1.5707963, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(-1.5707963, Eigen::Vector3d::UnitX());
+    pose.transform.rotation.x = q.x();
+    pose.transform.rotation.y = q.y();
+    pose.transform.rotation.z = q.z();
+    pose.transform.rotation.w = q.w();
+    tf2_msgs::TFMessage statics;
+    statics.transforms = {pose};
+    const ros::Time first(1000.0);
+    bag.write("/tf_static", first - ros::Duration(0.1), statics);
+    for (int frame = 0; frame < 2; ++frame) {
+      const ros::Time stamp = first + ros::Duration(0.1 * frame);
+      const stereo_msgs::DisparityImage::ConstPtr disparity = g_rig->disparityAt(stamp);
+      ASSERT_TRUE(disparity) << "frame " << frame;
+      bag.write("/stereo/left/camera_info", stamp, infoMessage(left_calibration, stamp));
+      bag.write("/stereo/disparity", stamp, *disparity);
+    }
+  }
+  std::string disparity_config, map_config;
+  ASSERT_TRUE(ros::param::get("~disparity_mapper_config", disparity_config));
+  ASSERT_TRUE(ros::param::get("~map_server_config", map_config));
+  int exit_code = -1;
+  const std::string output =
+      run(std::string(OFFLINE_MAPPER_PATH) + " --config '" + disparity_config + "' --config '" +
+              map_config + "' --bag '" + bag_path + "' --output-dir '" + folder_.string() +
+              "' --name offline",
+          &exit_code);
+  ASSERT_EQ(exit_code, 0) << output;
+  EXPECT_NE(output.find("disparity: 2 integrated, 0 skipped"), std::string::npos) << output;
+
+  double resolution = 0.0;
+  ASSERT_TRUE(ros::param::get("/disparity_mapper/resolution", resolution));
+  const VoxelDump online = voxelsOf(path("online.ot"), resolution);
+  const VoxelDump offline = voxelsOf(path("offline.ot"), resolution);
+  std::size_t occupied = 0, differing = 0;
+  for (const auto& [index, log_odds] : online) {
+    occupied += log_odds > 0.0f ? 1 : 0;
+    const auto other = offline.find(index);
+    differing += other == offline.end() || other->second != log_odds ? 1 : 0;
+  }
+  EXPECT_GT(online.size(), 1000u);
+  EXPECT_GT(occupied, 100u);
+  EXPECT_EQ(online.size(), offline.size());
+  EXPECT_EQ(differing, 0u) << "of " << online.size() << " voxels";
+  RecordProperty("voxels", static_cast<int>(online.size()));
+  RecordProperty("voxels_occupied", static_cast<int>(occupied));
+}
+
+TEST_F(StereoMatcherPairs, BadPairsAreDroppedAndTheMatcherRunsOn) {
   const CameraCalibration left_calibration = test::rtabmapCalibration(g_data_dir, "left");
   const CameraCalibration right_calibration = test::rtabmapCalibration(g_data_dir, "right");
   const cv::Mat left = test::rtabmapImage(g_data_dir, "left", "50");
@@ -275,7 +378,7 @@ TEST(StereoMatcherPairs, BadPairsAreDroppedAndTheMatcherRunsOn) {
   EXPECT_TRUE(waitUntil([] { return !g_rig->matcherWarning("stereo pair dropped").empty(); }, 5.0));
 }
 
-TEST(StereoMatcherPairs, AMissingInputIsNamed) {
+TEST_F(StereoMatcherPairs, AMissingInputIsNamed) {
   const CameraCalibration left_calibration = test::rtabmapCalibration(g_data_dir, "left");
   const cv::Mat left = test::rtabmapImage(g_data_dir, "left", "50");
   const cv::Mat right = test::rtabmapImage(g_data_dir, "right", "50");
