@@ -279,28 +279,6 @@ class DiagnosticsWatcher {
   ros::Subscriber subscriber_;
 };
 
-using VoxelDump = std::map<std::tuple<int, int, int>, float>;
-VoxelDump voxelsOf(const std::string& ot_path) {
-  VoxelMapConfig config;
-  config.resolution = kResolution;
-  const std::unique_ptr<VoxelMap> map = readOctomapFile(ot_path, config);
-  VoxelDump voxels;
-  map->forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
-    voxels[{index.x(), index.y(), index.z()}] = log_odds;
-  });
-  return voxels;
-}
-
-std::string run(const std::string& command, int* exit_code) {
-  std::string output;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return output;
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
-  *exit_code = pclose(pipe);
-  return output;
-}
-
 class MappingAgreement : public TestFolder {};
 
 TEST_F(MappingAgreement, OfflineMapperMapsTheRecordingAsTheNodeletsDoLive) {
@@ -336,9 +314,9 @@ TEST_F(MappingAgreement, OfflineMapperMapsTheRecordingAsTheNodeletsDoLive) {
   ASSERT_TRUE(ros::param::get("~config", config));
   int exit_code = -1;
   const std::string output =
-      run(std::string(OFFLINE_MAPPER_PATH) + " --config '" + config + "' --bag '" + bag +
-              "' --output-dir '" + folder_.string() + "' --name offline",
-          &exit_code);
+      runCommand(std::string(OFFLINE_MAPPER_PATH) + " --config '" + config + "' --bag '" + bag +
+                     "' --output-dir '" + folder_.string() + "' --name offline",
+                 &exit_code);
   ASSERT_EQ(exit_code, 0) << output;
   EXPECT_NE(output.find("depth: " + std::to_string(kFrames) + " integrated, 1 skipped"),
             std::string::npos)
@@ -347,8 +325,8 @@ TEST_F(MappingAgreement, OfflineMapperMapsTheRecordingAsTheNodeletsDoLive) {
       << output;
 
   // Voxel for voxel: the same voxels known, with the same log-odds.
-  const VoxelDump online = voxelsOf(path("online.ot"));
-  const VoxelDump offline = voxelsOf(path("offline.ot"));
+  const VoxelDump online = knownVoxelsOf(path("online.ot"), kResolution);
+  const VoxelDump offline = knownVoxelsOf(path("offline.ot"), kResolution);
   std::size_t depth_side = 0, stereo_side = 0, occupied = 0;
   for (const auto& [index, log_odds] : online) {
     (std::get<1>(index) >= 0 ? depth_side : stereo_side) += 1;

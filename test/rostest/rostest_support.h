@@ -1,12 +1,18 @@
 // Helpers shared by the rostests' test nodes: waiting, pausing the Simulator, reading published
-// clouds, grids and diagnostics, and checking them against a scene's analytic ground truth.
+// clouds, grids and diagnostics, checking them against a scene's analytic ground truth, running a
+// tool and reading the map files it saves.
 // Header-only: every test/rostest/<name>.cpp is its own executable.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
+#include <map>
+#include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -19,6 +25,7 @@
 #include <std_srvs/SetBool.h>
 #include <Eigen/Core>
 
+#include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/sim/scenes.h"
 
 namespace occupancy_fusion {
@@ -145,6 +152,31 @@ inline std::size_t diagnosticCount(const diagnostic_msgs::DiagnosticStatus& stat
     if (entry.key == key) return std::stoul(entry.value);
   }
   return 0;
+}
+
+// Runs a shell command; its output (stdout and stderr) and, in exit_code, pclose's status.
+inline std::string runCommand(const std::string& command, int* exit_code) {
+  std::string output;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return output;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
+  *exit_code = pclose(pipe);
+  return output;
+}
+
+// The known voxels of a saved .ot map (voxel index -> log-odds), to compare two maps voxel for
+// voxel.
+using VoxelDump = std::map<std::tuple<int, int, int>, float>;
+inline VoxelDump knownVoxelsOf(const std::string& ot_path, double resolution) {
+  VoxelMapConfig config;
+  config.resolution = resolution;
+  const std::unique_ptr<VoxelMap> map = readOctomapFile(ot_path, config);
+  VoxelDump voxels;
+  map->forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    voxels[{index.x(), index.y(), index.z()}] = log_odds;
+  });
+  return voxels;
 }
 
 }  // namespace occupancy_fusion

@@ -247,28 +247,6 @@ TEST_F(StereoMatcherPairs, PublishedDisparityEqualsTheCoreMatchersOnTheRtabmapPa
   EXPECT_EQ(g_rig->mapperCount("images dropped (invalid)"), 0u);
 }
 
-std::string run(const std::string& command, int* exit_code) {
-  std::string output;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return output;
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
-  *exit_code = pclose(pipe);
-  return output;
-}
-
-using VoxelDump = std::map<std::tuple<int, int, int>, float>;
-VoxelDump voxelsOf(const std::string& ot_path, double resolution) {
-  VoxelMapConfig config;
-  config.resolution = resolution;
-  const std::unique_ptr<VoxelMap> map = readOctomapFile(ot_path, config);
-  VoxelDump voxels;
-  map->forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
-    voxels[{index.x(), index.y(), index.z()}] = log_odds;
-  });
-  return voxels;
-}
-
 // Runs after the two pairs above were matched and mapped, before the sets below (gtest keeps the
 // order of a suite's tests): the
 // map the DisparityMapper built online from the matcher's disparity equals, voxel for voxel,
@@ -314,17 +292,17 @@ TEST_F(StereoMatcherPairs, OnlineMapEqualsOfflineMappersOnTheSameDisparity) {
   ASSERT_TRUE(ros::param::get("~map_server_config", map_config));
   int exit_code = -1;
   const std::string output =
-      run(std::string(OFFLINE_MAPPER_PATH) + " --config '" + disparity_config + "' --config '" +
-              map_config + "' --bag '" + bag_path + "' --output-dir '" + folder_.string() +
-              "' --name offline",
-          &exit_code);
+      runCommand(std::string(OFFLINE_MAPPER_PATH) + " --config '" + disparity_config +
+                     "' --config '" + map_config + "' --bag '" + bag_path + "' --output-dir '" +
+                     folder_.string() + "' --name offline",
+                 &exit_code);
   ASSERT_EQ(exit_code, 0) << output;
   EXPECT_NE(output.find("disparity: 2 integrated, 0 skipped"), std::string::npos) << output;
 
   double resolution = 0.0;
   ASSERT_TRUE(ros::param::get("/disparity_mapper/resolution", resolution));
-  const VoxelDump online = voxelsOf(path("online.ot"), resolution);
-  const VoxelDump offline = voxelsOf(path("offline.ot"), resolution);
+  const VoxelDump online = knownVoxelsOf(path("online.ot"), resolution);
+  const VoxelDump offline = knownVoxelsOf(path("offline.ot"), resolution);
   std::size_t occupied = 0, differing = 0;
   for (const auto& [index, log_odds] : online) {
     occupied += log_odds > 0.0f ? 1 : 0;
