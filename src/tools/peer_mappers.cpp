@@ -1,10 +1,9 @@
 #include "occupancy_fusion/tools/peer_mappers.h"
 
-#include <algorithm>
-#include <chrono>
 #include <limits>
 
 #include "occupancy_fusion/map/occupancy_model.h"
+#include "occupancy_fusion/tools/benchmark_harness.h"
 
 #ifdef OCCUPANCY_FUSION_WITH_BONXAI
 #include <bonxai_map/probabilistic_map.hpp>
@@ -17,23 +16,16 @@ namespace occupancy_fusion {
 namespace bench {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double medianOf(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
+// Median wall milliseconds of insert(i) over the clouds.
 template <typename Insert>
 double timeEach(std::size_t clouds, Insert&& insert) {
   std::vector<double> ms;
   for (std::size_t i = 0; i < clouds; ++i) {
-    const auto start = Clock::now();
+    const Clock::time_point start = Clock::now();
     insert(i);
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+    ms.push_back(millisecondsSince(start));
   }
-  return medianOf(ms);
+  return median(ms);
 }
 
 #ifdef OCCUPANCY_FUSION_WITH_BONXAI
