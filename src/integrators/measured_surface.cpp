@@ -1,5 +1,6 @@
 #include "occupancy_fusion/integrators/measured_surface.h"
 
+#include <omp.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -185,6 +186,25 @@ class SampleLattice {
 
 }  // namespace
 
+namespace {
+
+// Runs row(j) for j in [0, rows): on this thread's team when called outside a parallel region,
+// as tasks of the enclosing team inside one, so that the surface's rows and other work of the
+// frame (its disparity conversion) share the threads. Rows are independent, so any schedule
+// gives the same grid.
+template <typename Row>
+void forEachRow(int rows, Row&& row) {
+  if (omp_in_parallel()) {
+#pragma omp taskloop grainsize(4)
+    for (int j = 0; j < rows; ++j) row(j);
+  } else {
+#pragma omp parallel for schedule(static)
+    for (int j = 0; j < rows; ++j) row(j);
+  }
+}
+
+}  // namespace
+
 void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
                                    const MeasuredSurfaceConfig& config) {
   constexpr int kLanes = MedianNetwork::kLanes;
@@ -197,60 +217,56 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
   const MedianNetwork pair_network(pairs), sample_network((per_side * per_side + 1) / 2);
   const int local_reach = config.local_window_px / 2;
   const float limit = static_cast<float>(config.inlier_px);
-#pragma omp parallel
-  {
+  forEachRow(rows_, [&](int j) {
     std::vector<MedianNetwork::Lanes> rows(per_side * per_side);
     int counts[kLanes], sample_counts[kLanes];
     float robust[kLanes], one_side[kLanes];
     LocalPairs local[kLanes];
-#pragma omp for schedule(static)
-    for (int j = 0; j < rows_; ++j) {
-      const int v = j * step_;
-      for (int first = 0; first < columns_; first += kLanes) {
-        const int lanes_used = std::min(kLanes, columns_ - first);
-        // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
-        //    spoils fewer than half a window's pairs, but on a kink of the surface (a corner, an
-        //    object's edge) biased by the window's size.
-        lattice.pairMeans(first * stride, j * stride, stride, reach, rows.data());
-        pair_network.medians(rows.data(), counts, robust);
-        if (local_reach == 0) {
-          for (int l = 0; l < lanes_used; ++l) {
-            if (counts[l] >= needed) cells_[linear(first + l, j)] = robust[l];
-          }
-          continue;
-        }
-        // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
-        //    left out, and a kink's bias that of the small window. Where the small window has
-        //    enough valid pairs but too few of them near the median, it straddles a step (an
-        //    object's outline): pairs across it have means between the two sides, and their
-        //    median is a surface in the gap that no pixel sees. There the median of the wide
-        //    window's samples themselves (every other one), which lies on one side, takes its
-        //    place.
-        bool straddles = false;
+    const int v = j * step_;
+    for (int first = 0; first < columns_; first += kLanes) {
+      const int lanes_used = std::min(kLanes, columns_ - first);
+      // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
+      //    spoils fewer than half a window's pairs, but on a kink of the surface (a corner, an
+      //    object's edge) biased by the window's size.
+      lattice.pairMeans(first * stride, j * stride, stride, reach, rows.data());
+      pair_network.medians(rows.data(), counts, robust);
+      if (local_reach == 0) {
         for (int l = 0; l < lanes_used; ++l) {
-          local[l] = localPairs(disparity, (first + l) * step_, v, local_reach, robust[l], limit);
-          straddles |= counts[l] >= needed && local[l].inliers < kMinLocalPairs &&
-                       local[l].valid >= kMinLocalPairs;
+          if (counts[l] >= needed) cells_[linear(first + l, j)] = robust[l];
         }
-        if (straddles) {
-          lattice.samples(first * stride, j * stride, stride, reach, rows.data());
-          sample_network.medians(rows.data(), sample_counts, one_side);
+        continue;
+      }
+      // 2. The small window's mean over the pixels within inlier_px of it: the patches' pixels
+      //    left out, and a kink's bias that of the small window. Where the small window has
+      //    enough valid pairs but too few of them near the median, it straddles a step (an
+      //    object's outline): pairs across it have means between the two sides, and their
+      //    median is a surface in the gap that no pixel sees. There the median of the wide
+      //    window's samples themselves (every other one), which lies on one side, takes its
+      //    place.
+      bool straddles = false;
+      for (int l = 0; l < lanes_used; ++l) {
+        local[l] = localPairs(disparity, (first + l) * step_, v, local_reach, robust[l], limit);
+        straddles |= counts[l] >= needed && local[l].inliers < kMinLocalPairs &&
+                     local[l].valid >= kMinLocalPairs;
+      }
+      if (straddles) {
+        lattice.samples(first * stride, j * stride, stride, reach, rows.data());
+        sample_network.medians(rows.data(), sample_counts, one_side);
+      }
+      for (int l = 0; l < lanes_used; ++l) {
+        if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
+        float surface = robust[l];
+        if (local[l].inliers >= kMinLocalPairs) {
+          surface = local[l].mean;
+        } else if (local[l].valid >= kMinLocalPairs) {
+          const LocalPairs side =
+              localPairs(disparity, (first + l) * step_, v, local_reach, one_side[l], limit);
+          surface = side.inliers >= kMinLocalPairs ? side.mean : one_side[l];
         }
-        for (int l = 0; l < lanes_used; ++l) {
-          if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
-          float surface = robust[l];
-          if (local[l].inliers >= kMinLocalPairs) {
-            surface = local[l].mean;
-          } else if (local[l].valid >= kMinLocalPairs) {
-            const LocalPairs side =
-                localPairs(disparity, (first + l) * step_, v, local_reach, one_side[l], limit);
-            surface = side.inliers >= kMinLocalPairs ? side.mean : one_side[l];
-          }
-          cells_[linear(first + l, j)] = surface;
-        }
+        cells_[linear(first + l, j)] = surface;
       }
     }
-  }
+  });
 }
 
 void MeasuredSurface::extendByOneNode() {
@@ -262,8 +278,7 @@ void MeasuredSurface::extendByOneNode() {
   // mapped frames late.
   constexpr int kDirections[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
   std::vector<float> extended = cells_;
-#pragma omp parallel for schedule(static)
-  for (int j = 0; j < rows_; ++j) {
+  forEachRow(rows_, [&](int j) {
     for (int i = 0; i < columns_; ++i) {
       if (!std::isnan(cellAt(i, j))) continue;
       double sum = 0;
@@ -278,7 +293,7 @@ void MeasuredSurface::extendByOneNode() {
       }
       if (count > 0 && sum > 0) extended[linear(i, j)] = static_cast<float>(sum / count);
     }
-  }
+  });
   cells_ = std::move(extended);
 }
 
@@ -307,8 +322,7 @@ bool MeasuredSurface::isStep(int i, int j, int di, int dj, double step_px) const
 void MeasuredSurface::findSteps(double step_px) {
   steps_.assign(cells_.size(), 0);
   if (!(step_px > 0)) return;
-#pragma omp parallel for schedule(static)
-  for (int j = 0; j < rows_ - 1; ++j) {
+  forEachRow(rows_ - 1, [&](int j) {
     for (int i = 0; i < columns_ - 1; ++i) {
       const bool corners = !std::isnan(cellAt(i, j)) && !std::isnan(cellAt(i + 1, j)) &&
                            !std::isnan(cellAt(i, j + 1)) && !std::isnan(cellAt(i + 1, j + 1));
@@ -316,7 +330,7 @@ void MeasuredSurface::findSteps(double step_px) {
           corners && (isStep(i, j, 1, 0, step_px) || isStep(i, j + 1, 1, 0, step_px) ||
                       isStep(i, j, 0, 1, step_px) || isStep(i + 1, j, 0, 1, step_px));
     }
-  }
+  });
 }
 
 double MeasuredSurface::disparityAt(double u, double v) const {

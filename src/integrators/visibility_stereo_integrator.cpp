@@ -889,9 +889,21 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
   std::vector<Eigen::Vector3f> points;
   std::vector<float> sigmas;
   std::size_t dropped_uncertain = 0;
-  disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr,
-                       &dropped_uncertain);
-  const MeasuredSurface surface = measuredSurface(disparity, camera, T_map_camera);
+  MeasuredSurface surface;
+  // Bad input throws here: an exception must not leave an OpenMP region.
+  disparity.validate();
+  camera.validate();
+  // The conversion is one task beside the measured surface's rows, so that both threads stay busy
+  // (the conversion alone is sequential).
+#pragma omp parallel
+#pragma omp single
+  {
+#pragma omp task default(shared)
+    disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr,
+                         &dropped_uncertain);
+    surface = measuredSurface(disparity, camera, T_map_camera);
+#pragma omp taskwait
+  }
   StereoIntegrationStats stats =
       integrate(points, sigmas, T_map_camera.translation(), map, &surface);
   stats.dropped_uncertain = dropped_uncertain;
