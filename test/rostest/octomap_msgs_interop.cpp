@@ -37,11 +37,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The MD5 sum of octomap_msgs/Octomap (ROS 1; unchanged since octomap_msgs 0.3.0). Documented
-// where the generated code of the message is published, e.g. rosserial's octomap_msgs/Octomap.h
-// for ROS Kinetic, whose getMD5() returns it:
+// The MD5 sum of octomap_msgs/Octomap (ROS 1), as published in the message's generated code, e.g.
+// rosserial's octomap_msgs/Octomap.h for ROS Kinetic, whose getMD5() returns it:
 // https://github.com/vfdev-5/ros-kinetic-mbed/blob/5b7789dd7fafba958a283f71754e8c5e608b834e/octomap_msgs/Octomap.h
-// and `rosbag info` lists it for every recorded octomap_msgs/Octomap topic.
 constexpr char kOctomapMsgsMd5[] = "9a45536b45c5e409cd49f04bb2d9999f";
 
 constexpr int kMinClouds = 5;  // enough for a few thousand leaves at 0.05 m
