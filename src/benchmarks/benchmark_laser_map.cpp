@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/sensors/carmen_log.h"
 #include "occupancy_fusion/tools/command_line.h"
