@@ -24,7 +24,7 @@
 #include <sensor_msgs/LaserScan.h>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/params/laser_config_reader.h"
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/mapper_nodelet_base.h"

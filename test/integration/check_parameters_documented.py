@@ -24,8 +24,8 @@ import xml.etree.ElementTree as ElementTree
 
 # Where the nodelets' parameters are read (the offline tools read the same YAML through the same
 # readers).
-SOURCE_GLOBS = ["src/ros/*.cpp", "src/nodelets/*.cpp", "src/integrators/*config_reader.cpp",
-                "src/map/config_readers.cpp", "include/occupancy_fusion/params/*.h"]
+SOURCE_GLOBS = ["src/ros/*.cpp", "src/nodelets/*.cpp", "src/nodelets/simulator/*.cpp",
+                "src/params/*.cpp", "include/occupancy_fusion/params/*.h"]
 STRING = r'"((?:[^"\\]|\\.)*)"'
 # source.get("key" / prefix + "key"; the source object is any identifier.
 GET_CALL = re.compile(r"\b\w+\s*(?:\.|->)\s*get\(\s*(?:([\w:]+)(?:\(\))?\s*\+\s*)?" + STRING)

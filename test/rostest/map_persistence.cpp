@@ -137,10 +137,8 @@ double occupiedVoxels(const octomap::OcTree& tree) {
 }
 
 TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
-  const fs::path folder =
-      fs::temp_directory_path() / ("occupancy_fusion_persistence_" + std::to_string(getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
+  const TemporaryFolder temporary;
+  const fs::path& folder = temporary.path();
   const std::string a = (folder / "a").string();
   OutputWatcher<sensor_msgs::PointCloud2> watcher("/octomap_point_cloud_centers");
   OutputWatcher<nav_msgs::OccupancyGrid> grid_watcher("/projected_map");
@@ -290,7 +288,6 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   EXPECT_GE(changed, loaded / 10);
   watcher.unsubscribe();
   grid_watcher.unsubscribe();
-  fs::remove_all(folder);
 }
 
 }  // namespace

@@ -35,7 +35,6 @@
 #include <topic_tools/shape_shifter.h>
 #include <Eigen/Geometry>
 
-#include "../unit/test_folder.h"
 #include "occupancy_fusion/SaveMap.h"
 #include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_files.h"

@@ -1,6 +1,6 @@
 // Helpers shared by the rostests' test nodes: waiting, pausing the Simulator, reading published
 // clouds, grids and diagnostics, checking them against a scene's analytic ground truth, running a
-// tool and reading the map files it saves.
+// tool and reading the map files it saves; the tests' temporary folders (../common/test_folder.h).
 // Header-only: every test/rostest/<name>.cpp is its own executable.
 #pragma once
 
@@ -27,6 +27,8 @@
 
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/sim/scenes.h"
+
+#include "../common/test_folder.h"
 
 namespace occupancy_fusion {
 

@@ -277,9 +277,8 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
 
 TEST(SimPointCloudMapping, SaveMapWritesReadableFiles) {
   ASSERT_TRUE(g_final.grid && g_final.cloud);
-  const std::filesystem::path folder = std::filesystem::temp_directory_path() /
-                                       ("occupancy_fusion_test_" + std::to_string(getpid()));
-  std::filesystem::create_directories(folder);
+  const TemporaryFolder temporary;
+  const std::filesystem::path& folder = temporary.path();
   SaveMap save;
   save.request.prefix = (folder / "room").string();
   ASSERT_TRUE(ros::service::call("/map_server/save_map", save));
@@ -332,7 +331,6 @@ TEST(SimPointCloudMapping, SaveMapWritesReadableFiles) {
   const std::string yaml = readFile(save.request.prefix + ".yaml");
   EXPECT_NE(yaml.find("image: room.pgm"), std::string::npos) << yaml;
   EXPECT_NE(yaml.find("resolution: 0.05"), std::string::npos) << yaml;
-  std::filesystem::remove_all(folder);
 }
 
 TEST(SimPointCloudMapping, ClearBoxEmptiesTheBox) {

@@ -25,8 +25,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <opencv2/imgproc.hpp>
 
-#include "../unit/stereo/rtabmap_pair.h"
-#include "../unit/test_folder.h"
+#include "../common/rtabmap_pair.h"
 #include "occupancy_fusion/SaveMap.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/params/stereo_matcher_config_reader.h"

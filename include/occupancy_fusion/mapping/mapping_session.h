@@ -28,8 +28,8 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/fused_grid.h"

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/params/parameter_source.h"
 
 namespace occupancy_fusion {

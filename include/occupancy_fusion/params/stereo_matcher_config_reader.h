@@ -1,6 +1,5 @@
 // Reader of the stereo matcher's configuration over any ParameterSource (the StereoMatcher
-// nodelet's private parameters, a YAML file in the tools). Header only: the matcher lives in the
-// integrators library, which the map library (home of the other readers) must not depend on.
+// nodelet's private parameters, a YAML file in the tools). Header only.
 #pragma once
 
 #include <stdexcept>

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 
 namespace occupancy_fusion {
 

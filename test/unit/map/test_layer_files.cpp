@@ -24,7 +24,7 @@
 #include <utility>
 #include <vector>
 
-#include "../test_folder.h"
+#include "../../common/test_folder.h"
 #include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_files.h"
 

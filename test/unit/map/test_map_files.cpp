@@ -17,7 +17,7 @@
 #include <octomap/OcTree.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "../test_folder.h"
+#include "../../common/test_folder.h"
 #include "occupancy_fusion/map/map_files.h"
 
 namespace occupancy_fusion {

@@ -18,7 +18,7 @@
 #include <string>
 #include <tuple>
 
-#include "../test_folder.h"
+#include "../../common/test_folder.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/map/octomap_conversion.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "../test_folder.h"
+#include "../../common/test_folder.h"
 #include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/mapping/map_saving.h"

@@ -14,8 +14,8 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "../test_folder.h"
+#include "../../common/test_folder.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/saved_map.h"

@@ -12,6 +12,8 @@
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/yaml_parameter_source.h"
 
+#include "../../common/test_folder.h"
+
 namespace occupancy_fusion {
 namespace {
 
@@ -178,8 +180,8 @@ TEST(YamlParameterSource, RejectsBadFilesWithTheirName) {
 }
 
 TEST(YamlParameterSource, MergesFilesLikeSuccessiveRosparamLoads) {
-  const fs::path dir = fs::temp_directory_path() / ("yaml_merge_" + std::to_string(getpid()));
-  fs::create_directories(dir);
+  const TemporaryFolder temporary;
+  const fs::path& dir = temporary.path();
   std::ofstream(dir / "first.yaml") << "resolution: 0.1\nsensor_model: {hit: 0.7, miss: 0.4}\n";
   std::ofstream(dir / "second.yaml") << "sensor_model: {miss: 0.3}\noccupancy_max_z: 2.0\n";
   const YamlParameterSource source = YamlParameterSource::fromFiles(
@@ -194,7 +196,6 @@ TEST(YamlParameterSource, MergesFilesLikeSuccessiveRosparamLoads) {
   EXPECT_DOUBLE_EQ(miss, 0.3);  // replaced by the second
   EXPECT_DOUBLE_EQ(max_z, 2.0);
   EXPECT_THROW(YamlParameterSource::fromFiles({}), std::invalid_argument);
-  fs::remove_all(dir);
 }
 
 TEST(CommandLine, ParsesValuesFlagsAndRepeats) {

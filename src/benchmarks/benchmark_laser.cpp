@@ -25,9 +25,9 @@
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/sensors/carmen_log.h"
-#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {

@@ -13,17 +13,16 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/eval/stereo_corridor.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
@@ -35,7 +34,8 @@
 namespace occupancy_fusion {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using bench::Clock;
+using bench::millisecondsSince;
 
 // liboctomap's occupied leaves on the shared grid (pruned leaves expanded to the finest level).
 OccupiedVoxelSet occupiedOf(const octomap::OcTree& tree, double resolution) {
@@ -86,7 +86,7 @@ Run mapWithLiboctomap(const std::vector<StereoFrame>& frames, double resolution)
     const octomap::point3d origin(frame.origin.x(), frame.origin.y(), frame.origin.z());
     const auto start = Clock::now();
     tree.insertPointCloud(cloud, origin);
-    seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    seconds += 1e-3 * millisecondsSince(start);
   }
   return {"liboctomap", occupiedOf(tree, resolution), 1e3 * seconds / frames.size(), -1.0, {}};
 }
@@ -288,27 +288,11 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
   return config;
 }
 
+// The option's numbers, or {fallback} when it is not given.
 std::vector<double> numberList(const CommandLine& args, const std::string& option,
                                double fallback) {
-  std::vector<double> values;
   if (!args.has(option)) return {fallback};
-  std::stringstream stream(args.value(option));
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size()) {
-      throw UsageError("--" + option + " needs numbers separated by commas");
-    }
-    values.push_back(value);
-  }
-  if (values.empty()) throw UsageError("--" + option + " is empty");
-  return values;
+  return bench::parseNumbers<double>(option, args.value(option));
 }
 
 void writeImage(const std::string& path, const cv::Mat& image) {

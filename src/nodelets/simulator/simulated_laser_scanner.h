@@ -8,8 +8,9 @@
 
 #include <ros/ros.h>
 
-#include "occupancy_fusion/ros/simulated_sensors.h"
 #include "occupancy_fusion/sim/laser_scanner.h"
+
+#include "simulated_sensors.h"
 
 namespace occupancy_fusion {
 

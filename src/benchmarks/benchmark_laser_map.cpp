@@ -4,14 +4,14 @@
 // compared with the log's reference map, and the time per scan is reported.
 #include <omp.h>
 
-#include <chrono>
 #include <cstdio>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/sensors/carmen_log.h"
 #include "occupancy_fusion/tools/command_line.h"
@@ -22,7 +22,6 @@ namespace occupancy_fusion {
 cv::Mat laserRasterImage(const LogOddsRaster& raster, const cv::Vec3b& unknown);
 
 int runLaserMap(const CommandLine& args) {
-  using Clock = std::chrono::steady_clock;
   const std::string log = args.required("folder");  // the first positional argument
   const std::string output = args.required("output");
   CarmenReadConfig read;
@@ -42,11 +41,11 @@ int runLaserMap(const CommandLine& args) {
   layer_config.resolution = args.doubleValue("resolution", 0.05);
   GridLayer2D layer(layer_config);
 
-  const Clock::time_point start = Clock::now();
+  const bench::Clock::time_point start = bench::Clock::now();
   for (const CarmenLaserScan& record : scans) {
     integrator.integrateIntoLayer(record.scan, {record.x, record.y, record.theta}, &layer);
   }
-  const double total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  const double total_ms = bench::millisecondsSince(start);
 
   const LogOddsRaster raster = layer.toLogOddsRaster();
   if (raster.data.empty()) throw std::runtime_error("nothing observed in " + log);

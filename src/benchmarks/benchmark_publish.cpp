@@ -18,12 +18,12 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/occupied_voxel_cache.h"
 #include "occupancy_fusion/sim/deterministic_random.h"
-#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 
 namespace occupancy_fusion {

@@ -6,8 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/laser/polar_to_cartesian.h"
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/sim/laser_scanner.h"
 #include "occupancy_fusion/sim/scenes.h"
 

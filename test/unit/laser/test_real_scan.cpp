@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/laser/polar_to_cartesian.h"
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
 #include "occupancy_fusion/sensors/carmen_log.h"
 
 namespace occupancy_fusion {

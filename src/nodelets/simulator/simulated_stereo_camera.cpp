@@ -1,4 +1,4 @@
-#include "occupancy_fusion/ros/simulated_stereo_camera.h"
+#include "simulated_stereo_camera.h"
 
 #include <cmath>
 #include <stdexcept>

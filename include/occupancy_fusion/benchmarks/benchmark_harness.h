@@ -39,6 +39,19 @@ inline double median(std::vector<double> values) {
   return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
+// "full,half" -> {"full", "half"}. UsageError for an empty item and for an empty list.
+inline std::vector<std::string> splitList(const std::string& option, const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (item.empty()) throw UsageError("--" + option + ": empty item in '" + text + "'");
+    items.push_back(item);
+  }
+  if (items.empty()) throw UsageError("--" + option + " is empty");
+  return items;
+}
+
 // "0.05,0.1" -> {0.05, 0.1}. UsageError "--<option> needs <wanted> separated by commas, got
 // '<text>'" for an item that is not a number of type T or that `accept` refuses, and one for an
 // empty list.
@@ -59,6 +72,12 @@ std::vector<T> parseNumberList(const std::string& option, const std::string& tex
   }
   if (values.empty()) throw UsageError("--" + option + " is empty");
   return values;
+}
+
+// Any number: "-0.5,2" -> {-0.5, 2}.
+template <typename T>
+std::vector<T> parseNumbers(const std::string& option, const std::string& text) {
+  return parseNumberList<T>(option, text, "numbers", [](T) { return true; });
 }
 
 template <typename T>

@@ -1,9 +1,9 @@
-#include "occupancy_fusion/tools/peer_mappers.h"
+#include "occupancy_fusion/benchmarks/peer_mappers.h"
 
 #include <limits>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/map/occupancy_model.h"
-#include "occupancy_fusion/tools/benchmark_harness.h"
 
 #ifdef OCCUPANCY_FUSION_WITH_BONXAI
 #include <bonxai_map/probabilistic_map.hpp>

@@ -7,7 +7,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -16,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/eval/surface_accuracy.h"
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/map/voxel_map.h"
@@ -27,7 +27,8 @@
 namespace occupancy_fusion {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using bench::Clock;
+using bench::millisecondsSince;
 
 struct View {
   int sweep_index = 0;
@@ -268,8 +269,6 @@ void printScores(const char* scene_name, const std::string& method, int views_in
   std::fflush(stdout);
 }
 
-double processCpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
-
 void mapAndScore(const char* scene_name, const sim::Scene& scene, const std::vector<View>& views,
                  const CameraIntrinsics& camera, const PyramidDepthConfig& config,
                  const RunOptions& options, const std::vector<Eigen::Vector3d>& samples,
@@ -285,7 +284,7 @@ void mapAndScore(const char* scene_name, const sim::Scene& scene, const std::vec
   const std::vector<Eigen::Vector3d> points = selected(samples, observed);
   const std::string method = toString(config.method);
   double integrate_ms = 0.0;
-  const double cpu_start = processCpuSeconds();
+  const double cpu_start_ms = bench::processCpuMilliseconds();
   const bool shell_only = options.region == "surface" ||
                           (options.region == "auto" && config.method == DepthMethod::kIdeal);
   const std::vector<VoxelIndex> shell =
@@ -300,14 +299,15 @@ void mapAndScore(const char* scene_name, const sim::Scene& scene, const std::vec
     } else {
       integrator.integrate(views[i].posed().depth, camera, views[i].T_world_camera, &map);
     }
-    integrate_ms += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    integrate_ms += millisecondsSince(start);
     const int done = static_cast<int>(i) + 1;
     if (options.score_every > 0 && done % options.score_every == 0 && done < int(views.size())) {
       printScores(scene_name, method, done, scoreSurfacePoints(map, points), scoreFreeIfFull(),
-                  integrate_ms / done, processCpuSeconds() - cpu_start, shell_only);
+                  integrate_ms / done, 1e-3 * (bench::processCpuMilliseconds() - cpu_start_ms),
+                  shell_only);
     }
   }
-  const double cpu_s = processCpuSeconds() - cpu_start;
+  const double cpu_s = 1e-3 * (bench::processCpuMilliseconds() - cpu_start_ms);
   printScores(scene_name, method, static_cast<int>(views.size()), scoreSurfacePoints(map, points),
               scoreFreeIfFull(), integrate_ms / std::max<std::size_t>(views.size(), 1), cpu_s,
               shell_only);

@@ -1,4 +1,4 @@
-#include "occupancy_fusion/ros/simulated_laser_scanner.h"
+#include "simulated_laser_scanner.h"
 
 #include <cmath>
 #include <sstream>

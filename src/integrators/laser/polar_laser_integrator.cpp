@@ -1,4 +1,4 @@
-#include "occupancy_fusion/integrators/polar_laser_integrator.h"
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 
 #include <algorithm>
 #include <cmath>

@@ -9,8 +9,9 @@
 
 #include <ros/ros.h>
 
-#include "occupancy_fusion/ros/simulated_sensors.h"
 #include "occupancy_fusion/sim/stereo_camera.h"
+
+#include "simulated_sensors.h"
 
 namespace occupancy_fusion {
 

@@ -18,13 +18,13 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
+#include "occupancy_fusion/benchmarks/peer_mappers.h"
 #include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/seven_scenes_folder.h"
-#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
-#include "occupancy_fusion/tools/peer_mappers.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -158,7 +158,7 @@ OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntr
           bench::median(frame_cpu_ms), mapHash(map)};
 }
 
-// The same clouds for the peers (tools/peer_mappers.h).
+// The same clouds for the peers (benchmarks/peer_mappers.h).
 std::vector<std::vector<Eigen::Vector3f>> eigenClouds(
     const std::vector<octomap::Pointcloud>& clouds) {
   std::vector<std::vector<Eigen::Vector3f>> result(clouds.size());

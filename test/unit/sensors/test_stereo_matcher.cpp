@@ -16,7 +16,8 @@
 #include "occupancy_fusion/params/stereo_matcher_config_reader.h"
 #include "occupancy_fusion/sensors/stereo_matcher.h"
 #include "occupancy_fusion/sensors/stereo_rectification.h"
-#include "rtabmap_pair.h"
+
+#include "../../common/rtabmap_pair.h"
 
 namespace occupancy_fusion {
 namespace {

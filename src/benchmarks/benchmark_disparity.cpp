@@ -14,7 +14,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <ctime>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -23,17 +22,16 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/middlebury_folder.h"
-#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/stereo_matching.h"
 
@@ -43,35 +41,8 @@ namespace {
 namespace fs = std::filesystem;
 using bench::Clock;
 using bench::millisecondsSince;
-
-// Process CPU time (all threads), ms. On a shared, loaded machine the wall time of a call is
-// mostly the scheduler's; with one thread the CPU time is the work itself.
-double cpuMilliseconds() { return 1e3 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
-
-std::vector<std::string> splitList(const std::string& option, const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (item.empty()) throw UsageError("--" + option + ": empty item in '" + text + "'");
-    items.push_back(item);
-  }
-  if (items.empty()) throw UsageError("--" + option + " is empty");
-  return items;
-}
-
-std::vector<double> positiveNumbers(const std::string& option, const std::string& text) {
-  std::vector<double> values;
-  for (const std::string& item : splitList(option, text)) {
-    std::istringstream parser(item);
-    double value = 0.0;
-    if (!(parser >> value) || !parser.eof() || !(value > 0.0)) {
-      throw UsageError("--" + option + " needs positive numbers separated by commas");
-    }
-    values.push_back(value);
-  }
-  return values;
-}
+using bench::processCpuMilliseconds;
+using bench::splitList;
 
 // ---------------------------------------------------------------------------------------------
 // Disparity from the images: OpenCV's semi-global matcher.
@@ -173,7 +144,7 @@ MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& pos
                const VisibilityStereoIntegrator& integrator, VoxelMap* map) {
   MapRun run;
   std::size_t visits = 0, hits = 0, rays = 0;
-  const double cpu_start = cpuMilliseconds();
+  const double cpu_start = processCpuMilliseconds();
   const auto start = Clock::now();
   for (const Eigen::Isometry3d& pose : poses) {
     const StereoIntegrationStats stats = integrator.integrate(view.view(), view.camera, pose, map);
@@ -183,7 +154,7 @@ MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& pos
     run.points_per_frame = stats.points - stats.skipped_points;
   }
   run.wall_ms_per_frame = millisecondsSince(start) / poses.size();
-  run.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / poses.size();
+  run.cpu_ms_per_frame = (processCpuMilliseconds() - cpu_start) / poses.size();
   run.memory_bytes = map->memoryBytes();
   run.cache_hit_rate = visits == 0 ? 0.0 : static_cast<double>(hits) / visits;
   run.voxel_visits_per_frame = static_cast<double>(visits) / poses.size();
@@ -213,7 +184,7 @@ MapRun runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                   const std::vector<Eigen::Isometry3d>& poses, bool discretize,
                   octomap::OcTree* tree) {
   MapRun run;
-  const double cpu_start = cpuMilliseconds();
+  const double cpu_start = processCpuMilliseconds();
   const auto start = Clock::now();
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     const Eigen::Vector3d o = poses[i].translation();
@@ -221,7 +192,7 @@ MapRun runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                            discretize);
   }
   run.wall_ms_per_frame = millisecondsSince(start) / clouds.size();
-  run.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / clouds.size();
+  run.cpu_ms_per_frame = (processCpuMilliseconds() - cpu_start) / clouds.size();
   run.memory_bytes = tree->memoryUsage();
   run.points_per_frame = clouds.empty() ? 0 : clouds.front().size();
   return run;
@@ -237,7 +208,7 @@ struct WalkOnly {
 WalkOnly timeWalkOnly(const std::vector<octomap::Pointcloud>& clouds,
                       const std::vector<Eigen::Isometry3d>& poses, double resolution) {
   std::size_t steps = 0;  // counted by the walk, so the walk cannot be optimised away
-  const double cpu_start = cpuMilliseconds();
+  const double cpu_start = processCpuMilliseconds();
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     const Eigen::Vector3d origin = poses[i].translation();
     for (const octomap::point3d& p : clouds[i]) {
@@ -246,7 +217,7 @@ WalkOnly timeWalkOnly(const std::vector<octomap::Pointcloud>& clouds,
     }
   }
   WalkOnly walk;
-  walk.cpu_ms_per_frame = (cpuMilliseconds() - cpu_start) / clouds.size();
+  walk.cpu_ms_per_frame = (processCpuMilliseconds() - cpu_start) / clouds.size();
   walk.steps_per_frame = static_cast<double>(steps) / clouds.size();
   return walk;
 }
@@ -706,7 +677,8 @@ void runRtabmap(const std::string& folder, const Options& options) {
 
 int runDisparity(const CommandLine& args) {
   Options options;
-  options.resolutions = positiveNumbers("resolution", args.value("resolution", "0.1,0.2"));
+  options.resolutions =
+      bench::parsePositiveList<double>("resolution", args.value("resolution", "0.1,0.2"));
   for (const std::string& name : splitList("input", args.value("input", "full,half,quarter"))) {
     options.inputs.push_back(inputResolutionFromString(name));
   }

@@ -19,14 +19,14 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
+#include "occupancy_fusion/benchmarks/peer_mappers.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"
-#include "occupancy_fusion/tools/benchmark_harness.h"
 #include "occupancy_fusion/tools/command_line.h"
-#include "occupancy_fusion/tools/peer_mappers.h"
 
 namespace occupancy_fusion {
 
@@ -164,7 +164,8 @@ int runPointCloud(const CommandLine& args) {
       }
       const double ours_median = median(ours_ms);
       const double octomap_median = median(octomap_ms);
-      // The peers (tools/peer_mappers.h, when compiled in) on the same clouds, unlimited range.
+      // The peers (benchmarks/peer_mappers.h, when compiled in) on the same clouds, unlimited
+      // range.
       std::string peer_fields;
       if (max_range < 0) {
         for (const bench::PeerRun& peer : bench::runPeers(peer_points, peer_origins, resolution)) {

@@ -1,4 +1,4 @@
-#include "occupancy_fusion/ros/simulated_sensors.h"
+#include "simulated_sensors.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -14,6 +14,8 @@
 
 #include "occupancy_fusion/sensors/middlebury_folder.h"
 
+#include "../../common/test_folder.h"
+
 namespace occupancy_fusion {
 namespace {
 
@@ -46,23 +48,6 @@ void writeFile(const fs::path& path, const std::string& bytes) {
   std::ofstream file(path, std::ios::binary);
   file << bytes;
 }
-
-class TemporaryFolder {
- public:
-  TemporaryFolder() {
-    path_ =
-        fs::temp_directory_path() /
-        ("middlebury_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TemporaryFolder() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 const float kInf = std::numeric_limits<float>::infinity();
 

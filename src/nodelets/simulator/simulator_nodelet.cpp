@@ -13,11 +13,12 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/ros/ros_parameter_source.h"
-#include "occupancy_fusion/ros/simulated_laser_scanner.h"
-#include "occupancy_fusion/ros/simulated_sensors.h"
-#include "occupancy_fusion/ros/simulated_stereo_camera.h"
 #include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/scenes.h"
+
+#include "simulated_laser_scanner.h"
+#include "simulated_sensors.h"
+#include "simulated_stereo_camera.h"
 
 namespace occupancy_fusion {
 namespace {
