@@ -20,7 +20,6 @@
 #include <tuple>
 
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -148,10 +147,8 @@ TEST(OctomapMsgsInterop, Md5SumsAreOctomapMsgs) {
 }
 
 TEST(OctomapMsgsInterop, ConsumerDecodesTheSavedTree) {
-  const fs::path folder =
-      fs::temp_directory_path() / ("occupancy_fusion_octomap_msgs_" + std::to_string(getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
+  const TemporaryFolder temporary;
+  const fs::path& folder = temporary.path();
   MapperCounter counter;
 
   // A few clouds mapped, then nothing changes the map any more.
@@ -220,7 +217,6 @@ TEST(OctomapMsgsInterop, ConsumerDecodesTheSavedTree) {
   EXPECT_EQ(leafDifferences(leafLabels(altered), received_leaves), 1u);
 
   ASSERT_TRUE(setSimulatorPaused(false));
-  fs::remove_all(folder);
 }
 
 }  // namespace
