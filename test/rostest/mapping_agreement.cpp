@@ -252,57 +252,33 @@ bool play(const std::string& path) {
   return true;
 }
 
-// The latest status of each mapper's diagnostics task.
-class DiagnosticsWatcher {
- public:
-  DiagnosticsWatcher()
-      : subscriber_(ros::NodeHandle().subscribe("/diagnostics", 20,
-                                                &DiagnosticsWatcher::onDiagnostics, this)) {}
-  std::size_t count(const std::string& task, const std::string& key) const {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    const auto status = latest_.find(task);
-    return status == latest_.end() ? 0 : diagnosticCount(status->second, key);
-  }
-
- private:
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    for (const diagnostic_msgs::DiagnosticStatus& status : array->status) {
-      for (const char* task : {"depth mapping", "disparity mapping", "laser mapping"}) {
-        if (isTask(status, task)) latest_[task] = status;
-      }
-    }
-  }
-  mutable std::mutex mutex_;
-  std::map<std::string, diagnostic_msgs::DiagnosticStatus> latest_;
-  ros::Subscriber subscriber_;
-};
-
 class MappingAgreement : public TestFolder {};
 
 TEST_F(MappingAgreement, OfflineMapperMapsTheRecordingAsTheNodeletsDoLive) {
   const std::string bag = path("recording.bag");
   writeRecording(bag);
 
-  DiagnosticsWatcher diagnostics;
+  ros::NodeHandle node_handle;
+  const MapObserver diagnostics(node_handle);
   ASSERT_TRUE(play(bag)) << "the mappers did not subscribe";
   const auto integrated = [&](const char* task) {
-    return diagnostics.count(task, "frames integrated");
+    return diagnostics.diagnosticCount(task, "frames integrated");
   };
   ASSERT_TRUE(waitUntil(
       [&] {
         return integrated("depth mapping") == kFrames &&
                integrated("disparity mapping") == kFrames &&
                integrated("laser mapping") == 2 * kFrames &&
-               diagnostics.count("depth mapping", "frames dropped (duplicate stamp)") == 1;
+               diagnostics.diagnosticCount("depth mapping", "frames dropped (duplicate stamp)") ==
+                   1;
       },
       30.0))
       << "depth " << integrated("depth mapping") << ", disparity "
       << integrated("disparity mapping") << ", laser " << integrated("laser mapping")
       << " frames integrated";
-  EXPECT_EQ(diagnostics.count("depth mapping", "frames dropped"), 1u);
-  EXPECT_EQ(diagnostics.count("disparity mapping", "frames dropped"), 0u);
-  EXPECT_EQ(diagnostics.count("laser mapping", "frames dropped"), 0u);
+  EXPECT_EQ(diagnostics.diagnosticCount("depth mapping", "frames dropped"), 1u);
+  EXPECT_EQ(diagnostics.diagnosticCount("disparity mapping", "frames dropped"), 0u);
+  EXPECT_EQ(diagnostics.diagnosticCount("laser mapping", "frames dropped"), 0u);
 
   SaveMap save;
   save.request.prefix = path("online");

@@ -107,32 +107,6 @@ std::size_t leafDifferences(const LeafLabels& a, const LeafLabels& b) {
   return differences;
 }
 
-// The point-cloud mapper's "clouds integrated", from /diagnostics.
-class MapperCounter {
- public:
-  MapperCounter() {
-    subscriber_ =
-        ros::NodeHandle().subscribe("/diagnostics", 10, &MapperCounter::onDiagnostics, this);
-  }
-  std::size_t integrated() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return integrated_;
-  }
-
- private:
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& status : array->status) {
-      if (isTask(status, "point cloud mapping")) {
-        integrated_ = diagnosticCount(status, "clouds integrated");
-      }
-    }
-  }
-  mutable std::mutex mutex_;
-  std::size_t integrated_ = 0;
-  ros::Subscriber subscriber_;
-};
-
 TEST(OctomapMsgsInterop, Md5SumsAreOctomapMsgs) {
   const std::string ours = ros::message_traits::MD5Sum<Octomap>::value();
   EXPECT_EQ(ours, kOctomapMsgsMd5) << "occupancy_fusion/Octomap (msg/Octomap.msg)";
@@ -149,15 +123,19 @@ TEST(OctomapMsgsInterop, Md5SumsAreOctomapMsgs) {
 TEST(OctomapMsgsInterop, ConsumerDecodesTheSavedTree) {
   const TemporaryFolder temporary;
   const fs::path& folder = temporary.path();
-  MapperCounter counter;
+  ros::NodeHandle node_handle;
+  const MapObserver observer(node_handle);
+  const auto integrated = [&] {
+    return observer.diagnosticCount("point cloud mapping", "clouds integrated");
+  };
 
   // A few clouds mapped, then nothing changes the map any more.
-  ASSERT_TRUE(waitUntil([&] { return counter.integrated() >= kMinClouds; }, 40.0))
-      << "the point-cloud mapper integrated " << counter.integrated() << " clouds";
+  ASSERT_TRUE(waitUntil([&] { return integrated() >= kMinClouds; }, 40.0))
+      << "the point-cloud mapper integrated " << integrated() << " clouds";
   ASSERT_TRUE(ros::service::waitForService("/simulator/pause", ros::Duration(10.0)));
   ASSERT_TRUE(setSimulatorPaused(true));
   std::size_t settled = 0;
-  ASSERT_TRUE(waitUntilSteady([&] { return counter.integrated(); }, 2.5, 20.0, &settled));
+  ASSERT_TRUE(waitUntilSteady(integrated, 2.5, 20.0, &settled));
 
   SaveMap save;
   save.request.prefix = (folder / "saved").string();

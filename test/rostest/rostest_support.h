@@ -11,12 +11,15 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <tuple>
+#include <typeindex>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
@@ -155,6 +158,137 @@ inline std::size_t diagnosticCount(const diagnostic_msgs::DiagnosticStatus& stat
   }
   return 0;
 }
+
+using DiagnosticValues = std::map<std::string, std::string>;
+
+// The value of `key` as a count; 0 when absent.
+inline std::size_t countIn(const DiagnosticValues& values, const std::string& key) {
+  const auto found = values.find(key);
+  return found == values.end() ? 0 : std::stoul(found->second);
+}
+
+// The rostests' one observer of a running map graph: per watched topic its latest message, how
+// many came and when the last one came (wall time); per diagnostic task its latest values. Tests
+// that record more (histories, the images behind a map) pass a callback to watch() or
+// onDiagnostics(). Every callback runs under no lock of the observer.
+class MapObserver {
+ public:
+  explicit MapObserver(ros::NodeHandle& node_handle) : node_handle_(node_handle) {
+    subscribers_.push_back(node_handle_.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 50,
+        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) { onArray(*array); }));
+  }
+  // The spinner's threads may be inside a callback while the test suite tears down: shut the
+  // subscriptions down first (shutdown() waits for a running callback).
+  ~MapObserver() {
+    for (ros::Subscriber& subscriber : subscribers_) subscriber.shutdown();
+  }
+  MapObserver(const MapObserver&) = delete;
+  MapObserver& operator=(const MapObserver&) = delete;
+
+  template <class Message>
+  void watch(const std::string& topic, std::uint32_t queue_size = 1,
+             std::function<void(const typename Message::ConstPtr&)> also = {}) {
+    subscribers_.push_back(node_handle_.subscribe<Message>(
+        topic, queue_size, [this, topic, also](const typename Message::ConstPtr& message) {
+          {
+            std::lock_guard<std::mutex> lock(mutex_);
+            Latest& latest = latest_[topic];
+            latest.message = message;
+            latest.type = std::type_index(typeid(Message));
+            ++latest.count;
+            latest.arrival = ros::WallTime::now();
+          }
+          if (also) also(message);
+        }));
+  }
+  // The latest message on a watched topic; null before the first.
+  template <class Message>
+  typename Message::ConstPtr latest(const std::string& topic) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = latest_.find(topic);
+    if (found == latest_.end() || !found->second.message) return {};
+    if (found->second.type != std::type_index(typeid(Message))) {
+      ADD_FAILURE() << topic << " is watched with another message type";
+      return {};
+    }
+    return boost::static_pointer_cast<const Message>(found->second.message);
+  }
+  std::size_t received(const std::string& topic) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = latest_.find(topic);
+    return found == latest_.end() ? 0 : found->second.count;
+  }
+  ros::WallTime arrival(const std::string& topic) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = latest_.find(topic);
+    return found == latest_.end() ? ros::WallTime() : found->second.arrival;
+  }
+
+  // The latest values of the diagnostic task whose status name ends in `task` ("<node>: <task>");
+  // empty until it reported values (diagnostic_updater's first status, "Node starting up", has
+  // none).
+  DiagnosticValues diagnostics(const std::string& task) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [name, values] : diagnostics_) {
+      if (endsWith(name, task)) return values;
+    }
+    return {};
+  }
+  // When the task's latest values came (wall time); zero before.
+  ros::WallTime diagnosticsArrival(const std::string& task) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [name, arrival] : diagnostics_arrivals_) {
+      if (endsWith(name, task)) return arrival;
+    }
+    return {};
+  }
+  // The value of `key` in the task's latest values as a count; 0 when absent.
+  std::size_t diagnosticCount(const std::string& task, const std::string& key) const {
+    return countIn(diagnostics(task), key);
+  }
+  void onDiagnostics(std::function<void(const diagnostic_msgs::DiagnosticStatus&)> hook) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    diagnostics_hooks_.push_back(std::move(hook));
+  }
+
+ private:
+  struct Latest {
+    boost::shared_ptr<const void> message;
+    std::type_index type = std::type_index(typeid(void));
+    std::size_t count = 0;
+    ros::WallTime arrival;
+  };
+  static bool endsWith(const std::string& name, const std::string& task) {
+    return name.size() >= task.size() &&
+           name.compare(name.size() - task.size(), task.size(), task) == 0;
+  }
+  void onArray(const diagnostic_msgs::DiagnosticArray& array) {
+    std::vector<std::function<void(const diagnostic_msgs::DiagnosticStatus&)>> hooks;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const auto& status : array.status) {
+        if (status.values.empty()) continue;
+        DiagnosticValues& values = diagnostics_[status.name];
+        values.clear();
+        for (const auto& entry : status.values) values[entry.key] = entry.value;
+        diagnostics_arrivals_[status.name] = ros::WallTime::now();
+      }
+      hooks = diagnostics_hooks_;
+    }
+    for (const auto& status : array.status) {
+      for (const auto& hook : hooks) hook(status);
+    }
+  }
+
+  ros::NodeHandle node_handle_;
+  mutable std::mutex mutex_;
+  std::vector<ros::Subscriber> subscribers_;
+  std::map<std::string, Latest> latest_;
+  std::map<std::string, DiagnosticValues> diagnostics_;
+  std::map<std::string, ros::WallTime> diagnostics_arrivals_;
+  std::vector<std::function<void(const diagnostic_msgs::DiagnosticStatus&)>> diagnostics_hooks_;
+};
 
 // Runs a shell command; its output (stdout and stderr) and, in exit_code, pclose's status.
 inline std::string runCommand(const std::string& command, int* exit_code) {

@@ -50,32 +50,20 @@ struct ObservedImage {
   std::vector<Eigen::Vector3d> points;
 };
 
-// Keeps the latest map, the depth camera's images (as surface samples) and the diagnostics.
-class Observer {
+// The depth camera's images (as surface samples) and its latest camera_info, as a second
+// subscriber sees them.
+class DepthImageRecorder {
  public:
-  explicit Observer(ros::NodeHandle& node_handle) : tf_buffer_(ros::Duration(300.0)) {
+  explicit DepthImageRecorder(MapObserver* observer) : tf_buffer_(ros::Duration(300.0)) {
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_);
-    binary_sub_ = node_handle.subscribe("octomap_binary", 1, &Observer::onBinary, this);
-    image_sub_ = node_handle.subscribe("camera/depth/image", 20, &Observer::onImage, this);
-    info_sub_ = node_handle.subscribe("camera/depth/camera_info", 20, &Observer::onInfo, this);
-    diagnostics_sub_ = node_handle.subscribe("/diagnostics", 20, &Observer::onDiagnostics, this);
+    observer->watch<sensor_msgs::CameraInfo>(
+        "camera/depth/camera_info", 20,
+        [this](const sensor_msgs::CameraInfo::ConstPtr& info) { onInfo(info); });
+    observer->watch<sensor_msgs::Image>(
+        "camera/depth/image", 20,
+        [this](const sensor_msgs::Image::ConstPtr& image) { onImage(image); });
   }
 
-  struct Counters {
-    std::size_t integrated = 0, dropped_encoding = 0, dropped_camera_info = 0;
-    std::size_t camera_infos = 0;     // camera_info messages the DepthMapper received
-    ros::WallTime depth_status_time;  // when the DepthMapper's status last came
-    std::size_t known_voxels = 0;     // from the MapServer
-    bool seen = false;
-  };
-  Counters counters() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return counters_;
-  }
-  std::pair<occupancy_fusion::Octomap::ConstPtr, ros::WallTime> latestMap() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return {map_, map_time_};
-  }
   sensor_msgs::CameraInfo::ConstPtr latestInfo() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return info_;
@@ -109,11 +97,6 @@ class Observer {
   }
 
  private:
-  void onBinary(const occupancy_fusion::Octomap::ConstPtr& map) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    map_ = map;
-    map_time_ = ros::WallTime::now();
-  }
   void onInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (info->width > 0 && info->K[0] > 0.0) info_ = info;  // not the test's own bad ones
@@ -137,36 +120,44 @@ class Observer {
     }
     images_.push_back(std::move(observed));
   }
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& status : array->status) {
-      if (isTask(status, "depth mapping")) {
-        counters_.integrated = diagnosticCount(status, "images integrated");
-        counters_.dropped_encoding = diagnosticCount(status, "images dropped (encoding)");
-        counters_.dropped_camera_info = diagnosticCount(status, "images dropped (camera_info)");
-        counters_.camera_infos = diagnosticCount(status, "camera_info received");
-        counters_.depth_status_time = ros::WallTime::now();
-        counters_.seen = true;
-      }
-      if (isTask(status, "map publishing")) {
-        counters_.known_voxels = diagnosticCount(status, "known voxels");
-      }
-    }
-  }
 
   mutable std::mutex mutex_;
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  occupancy_fusion::Octomap::ConstPtr map_;
-  ros::WallTime map_time_;
   sensor_msgs::CameraInfo::ConstPtr info_;
   bool observing_ = true;
   std::vector<ObservedImage> images_;
-  Counters counters_;
-  ros::Subscriber binary_sub_, image_sub_, info_sub_, diagnostics_sub_;
 };
 
-Observer* g_observer = nullptr;
+// The DepthMapper's and the MapServer's counts, as last reported.
+struct Counters {
+  std::size_t integrated = 0, dropped_encoding = 0, dropped_camera_info = 0;
+  std::size_t camera_infos = 0;     // camera_info messages the DepthMapper received
+  ros::WallTime depth_status_time;  // when the DepthMapper's status last came
+  std::size_t known_voxels = 0;     // from the MapServer
+};
+
+Counters countersOf(const MapObserver& observer) {
+  const DiagnosticValues depth = observer.diagnostics("depth mapping");
+  Counters counters;
+  counters.integrated = countIn(depth, "images integrated");
+  counters.dropped_encoding = countIn(depth, "images dropped (encoding)");
+  counters.dropped_camera_info = countIn(depth, "images dropped (camera_info)");
+  counters.camera_infos = countIn(depth, "camera_info received");
+  counters.depth_status_time = observer.diagnosticsArrival("depth mapping");
+  counters.known_voxels = observer.diagnosticCount("map publishing", "known voxels");
+  return counters;
+}
+
+// The latest map and when it came.
+std::pair<occupancy_fusion::Octomap::ConstPtr, ros::WallTime> latestMap(
+    const MapObserver& observer) {
+  return {observer.latest<occupancy_fusion::Octomap>("octomap_binary"),
+          observer.arrival("octomap_binary")};
+}
+
+MapObserver* g_observer = nullptr;
+DepthImageRecorder* g_images = nullptr;
 
 std::unique_ptr<octomap::OcTree> treeOf(const occupancy_fusion::Octomap& message) {
   auto tree = std::make_unique<octomap::OcTree>(message.resolution);
@@ -197,11 +188,11 @@ bool occupiedNear(const octomap::OcTree& tree, const Eigen::Vector3d& point) {
 // Waits until the mapper has integrated everything in flight and the map that follows it has
 // been published; returns that map.
 occupancy_fusion::Octomap::ConstPtr settledMap() {
-  std::size_t integrated = g_observer->counters().integrated;
+  std::size_t integrated = countersOf(*g_observer).integrated;
   ros::WallTime stable_since = ros::WallTime::now();
   waitUntil(
       [&] {
-        const std::size_t now = g_observer->counters().integrated;
+        const std::size_t now = countersOf(*g_observer).integrated;
         if (now != integrated) {
           integrated = now;
           stable_since = ros::WallTime::now();
@@ -213,23 +204,24 @@ occupancy_fusion::Octomap::ConstPtr settledMap() {
   // Unchanged maps are not re-sent: the latest one is current if none came for 1.5 s.
   waitUntil(
       [&] {
-        return ros::WallTime::now() - g_observer->latestMap().second > ros::WallDuration(1.5) &&
+        return ros::WallTime::now() - latestMap(*g_observer).second > ros::WallDuration(1.5) &&
                ros::WallTime::now() - since > ros::WallDuration(1.5);
       },
       20.0);
-  return g_observer->latestMap().first;
+  return latestMap(*g_observer).first;
 }
 
 TEST(SimDepthMapping, MapMatchesGroundTruth) {
   ASSERT_TRUE(waitUntil(
       [] {
-        return g_observer->counters().integrated >= static_cast<std::size_t>(g_settings.min_images);
+        return countersOf(*g_observer).integrated >=
+               static_cast<std::size_t>(g_settings.min_images);
       },
       90.0))
-      << "only " << g_observer->counters().integrated << " depth images integrated";
+      << "only " << countersOf(*g_observer).integrated << " depth images integrated";
   ASSERT_TRUE(setSimulatorPaused(true));
   const occupancy_fusion::Octomap::ConstPtr message = settledMap();
-  g_observer->stopObserving();
+  g_images->stopObserving();
   ASSERT_TRUE(message);
   EXPECT_EQ(message->header.frame_id, "map");
   EXPECT_NEAR(message->resolution, g_settings.resolution, 1e-9);
@@ -262,10 +254,10 @@ TEST(SimDepthMapping, MapMatchesGroundTruth) {
 
   // The surface the depth images showed: each sample must have an occupied voxel next to it.
   // Half way along its ray lies space the camera saw through: it must be free in the map.
-  const std::vector<Observer::Ray> rays = g_observer->observedRays();
+  const std::vector<DepthImageRecorder::Ray> rays = g_images->observedRays();
   std::size_t covered = 0, on_true_surface = 0;
   std::set<std::tuple<int, int, int>> surface_voxels, seen_free_voxels, seen_free_labelled_free;
-  for (const Observer::Ray& ray : rays) {
+  for (const DepthImageRecorder::Ray& ray : rays) {
     const Eigen::Vector3d& p = ray.end;
     covered += occupiedNear(*tree, p) ? 1 : 0;
     on_true_surface += scene.distanceToSurface(p) < 1e-3 ? 1 : 0;
@@ -335,11 +327,11 @@ sensor_msgs::ImagePtr flatDepthImage(const sensor_msgs::CameraInfo& info, float 
 void sendFrame(ros::Publisher& info_pub, ros::Publisher& image_pub, sensor_msgs::CameraInfo info,
                const sensor_msgs::ImagePtr& image) {
   const ros::WallTime asked = ros::WallTime::now();
-  ASSERT_TRUE(waitUntil([&] { return g_observer->counters().depth_status_time > asked; }, 5.0));
-  const std::size_t received = g_observer->counters().camera_infos;
+  ASSERT_TRUE(waitUntil([&] { return countersOf(*g_observer).depth_status_time > asked; }, 5.0));
+  const std::size_t received = countersOf(*g_observer).camera_infos;
   info.header.stamp = image->header.stamp;
   info_pub.publish(info);
-  ASSERT_TRUE(waitUntil([&] { return g_observer->counters().camera_infos >= received + 1; }, 5.0))
+  ASSERT_TRUE(waitUntil([&] { return countersOf(*g_observer).camera_infos >= received + 1; }, 5.0))
       << "the DepthMapper did not report the camera_info";
   image_pub.publish(image);
 }
@@ -349,7 +341,7 @@ TEST(SimDepthMapping, BadFramesLeaveTheMapUnchanged) {
   ros::Publisher image_pub = node_handle.advertise<sensor_msgs::Image>("camera/depth/image", 5);
   ros::Publisher info_pub =
       node_handle.advertise<sensor_msgs::CameraInfo>("camera/depth/camera_info", 5);
-  const sensor_msgs::CameraInfo::ConstPtr info = g_observer->latestInfo();
+  const sensor_msgs::CameraInfo::ConstPtr info = g_images->latestInfo();
   ASSERT_TRUE(info);
   // The test's own Observer subscribes to both topics (an intra-process link, counted at once):
   // the DepthMapper is connected when a second subscriber is.
@@ -357,8 +349,8 @@ TEST(SimDepthMapping, BadFramesLeaveTheMapUnchanged) {
       [&] { return image_pub.getNumSubscribers() >= 2 && info_pub.getNumSubscribers() >= 2; },
       10.0))
       << "the DepthMapper did not connect to the test's publishers";
-  const Observer::Counters before = g_observer->counters();
-  const ros::WallTime map_time_before = g_observer->latestMap().second;
+  const Counters before = countersOf(*g_observer);
+  const ros::WallTime map_time_before = latestMap(*g_observer).second;
 
   // 1 m in front of the camera everywhere: integrated, it would change thousands of voxels.
   auto wrong_encoding = flatDepthImage(*info, 1.0f, ros::Time::now());
@@ -375,28 +367,29 @@ TEST(SimDepthMapping, BadFramesLeaveTheMapUnchanged) {
 
   ASSERT_TRUE(waitUntil(
       [&] {
-        const Observer::Counters now = g_observer->counters();
+        const Counters now = countersOf(*g_observer);
         return now.dropped_encoding == before.dropped_encoding + 1 &&
                now.dropped_camera_info == before.dropped_camera_info + 2;
       },
       10.0))
       << "the bad frames were not all reported as dropped";
   ros::WallDuration(2.0).sleep();  // four publishing cycles: a change would have been sent
-  const Observer::Counters after = g_observer->counters();
+  const Counters after = countersOf(*g_observer);
   EXPECT_EQ(after.integrated, before.integrated);
   EXPECT_EQ(after.known_voxels, before.known_voxels);
-  EXPECT_EQ(g_observer->latestMap().second, map_time_before) << "the map changed";
+  EXPECT_EQ(latestMap(*g_observer).second, map_time_before) << "the map changed";
 
   // The same frame with its own camera_info is integrated: the bad ones were dropped for what
   // was wrong with them, and a change of the map would have been seen.
   sendFrame(info_pub, image_pub, *info, flatDepthImage(*info, 1.0f, ros::Time::now()));
-  EXPECT_TRUE(waitUntil([&] { return g_observer->latestMap().second > map_time_before; }, 10.0))
+  EXPECT_TRUE(waitUntil([&] { return latestMap(*g_observer).second > map_time_before; }, 10.0))
       << "a good frame did not change the map";
 
   // The mapper keeps running on the simulator's images.
   ASSERT_TRUE(setSimulatorPaused(false));
-  const std::size_t integrated = g_observer->counters().integrated;
-  EXPECT_TRUE(waitUntil([&] { return g_observer->counters().integrated >= integrated + 5; }, 20.0));
+  const std::size_t integrated = countersOf(*g_observer).integrated;
+  EXPECT_TRUE(
+      waitUntil([&] { return countersOf(*g_observer).integrated >= integrated + 5; }, 20.0));
 }
 
 }  // namespace
@@ -410,7 +403,10 @@ int main(int argc, char** argv) {
   occupancy_fusion::Settings& settings = occupancy_fusion::g_settings;
   private_node_handle.param("min_images", settings.min_images, settings.min_images);
   private_node_handle.param("resolution", settings.resolution, settings.resolution);
-  occupancy_fusion::Observer observer(node_handle);
+  occupancy_fusion::MapObserver observer(node_handle);
+  observer.watch<occupancy_fusion::Octomap>("octomap_binary");
+  occupancy_fusion::DepthImageRecorder images(&observer);
   occupancy_fusion::g_observer = &observer;
+  occupancy_fusion::g_images = &images;
   return occupancy_fusion::runTestsWhileSpinning();
 }

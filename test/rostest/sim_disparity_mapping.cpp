@@ -39,63 +39,20 @@ struct MapperCounters {
   std::size_t integrated = 0;
   std::size_t dropped_invalid = 0;
   std::string map_version;
-  ros::WallTime received;
 };
 
-// Keeps the latest published grid and voxel centres and the mapper's latest counters.
-class MapObserver {
- public:
-  explicit MapObserver(ros::NodeHandle& node_handle) {
-    grid_sub_ = node_handle.subscribe("projected_map", 1, &MapObserver::onGrid, this);
-    cloud_sub_ =
-        node_handle.subscribe("octomap_point_cloud_centers", 1, &MapObserver::onCloud, this);
-    diagnostics_sub_ = node_handle.subscribe("/diagnostics", 10, &MapObserver::onDiagnostics, this);
-  }
+constexpr char kTask[] = "disparity mapping";
 
-  nav_msgs::OccupancyGrid::ConstPtr grid() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return grid_;
-  }
-  sensor_msgs::PointCloud2::ConstPtr cloud() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return cloud_;
-  }
-  MapperCounters counters() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return counters_;
-  }
-
- private:
-  void onGrid(const nav_msgs::OccupancyGrid::ConstPtr& grid) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    grid_ = grid;
-  }
-  void onCloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    cloud_ = cloud;
-  }
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    for (const auto& status : array->status) {
-      if (!isTask(status, "disparity mapping")) continue;
-      std::map<std::string, std::string> values;
-      for (const auto& entry : status.values) values[entry.key] = entry.value;
-      // diagnostic_updater first publishes each task as "Node starting up", without values: an
-      // early subscriber gets that status (values.at threw and ended the test node).
-      if (values.count("images integrated") == 0) continue;
-      std::lock_guard<std::mutex> lock(mutex_);
-      counters_.integrated = std::stoul(values.at("images integrated"));
-      counters_.dropped_invalid = std::stoul(values.at("images dropped (invalid)"));
-      counters_.map_version = values.at("map version");
-      counters_.received = ros::WallTime::now();
-    }
-  }
-
-  mutable std::mutex mutex_;
-  nav_msgs::OccupancyGrid::ConstPtr grid_;
-  sensor_msgs::PointCloud2::ConstPtr cloud_;
-  MapperCounters counters_;
-  ros::Subscriber grid_sub_, cloud_sub_, diagnostics_sub_;
-};
+// The DisparityMapper's latest counters.
+MapperCounters countersOf(const MapObserver& observer) {
+  const DiagnosticValues values = observer.diagnostics(kTask);
+  MapperCounters counters;
+  counters.integrated = countIn(values, "images integrated");
+  counters.dropped_invalid = countIn(values, "images dropped (invalid)");
+  const auto version = values.find("map version");
+  if (version != values.end()) counters.map_version = version->second;
+  return counters;
+}
 
 Settings g_settings;
 MapObserver* g_observer = nullptr;
@@ -163,13 +120,16 @@ double coveredFraction(const std::vector<Eigen::Vector3d>& samples,
 
 TEST(SimDisparityMapping, MapMatchesGroundTruth) {
   ASSERT_TRUE(waitUntil(
-      [] { return g_observer->counters().integrated >= std::size_t(g_settings.min_images); }, 90.0))
-      << "only " << g_observer->counters().integrated << " disparity images integrated";
+      [] { return countersOf(*g_observer).integrated >= std::size_t(g_settings.min_images); },
+      90.0))
+      << "only " << countersOf(*g_observer).integrated << " disparity images integrated";
   ASSERT_TRUE(setSimulatorPaused(true));
   // Let images in flight be integrated and published; then the map stays as it is.
   ros::WallDuration(2.0).sleep();
-  const sensor_msgs::PointCloud2::ConstPtr cloud = g_observer->cloud();
-  const nav_msgs::OccupancyGrid::ConstPtr grid = g_observer->grid();
+  const sensor_msgs::PointCloud2::ConstPtr cloud =
+      g_observer->latest<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
+  const nav_msgs::OccupancyGrid::ConstPtr grid =
+      g_observer->latest<nav_msgs::OccupancyGrid>("projected_map");
   ASSERT_TRUE(cloud && grid);
   const sim::Scene scene = sim::makeRoomScene();
 
@@ -215,10 +175,10 @@ TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
   // Images in flight integrated and reported: the count kept still over two diagnostics periods.
   std::size_t settled = 0;
   ASSERT_TRUE(
-      waitUntilSteady([] { return g_observer->counters().integrated; }, 2.5, 20.0, &settled));
+      waitUntilSteady([] { return countersOf(*g_observer).integrated; }, 2.5, 20.0, &settled));
   ASSERT_TRUE(waitUntil([] { return g_disparity_publisher->getNumSubscribers() > 0; }, 10.0))
       << "the DisparityMapper did not subscribe to the test's images";
-  const MapperCounters before = g_observer->counters();
+  const MapperCounters before = countersOf(*g_observer);
   ASSERT_GT(before.integrated, 0u);
 
   // Wrong encoding: 16-bit data of the camera's size.
@@ -231,16 +191,16 @@ TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
   g_disparity_publisher->publish(plausibleDisparity(100, 80));
 
   ASSERT_TRUE(waitUntil(
-      [&] { return g_observer->counters().dropped_invalid >= before.dropped_invalid + 2; }, 10.0))
-      << "dropped " << g_observer->counters().dropped_invalid - before.dropped_invalid;
-  const MapperCounters after = g_observer->counters();
+      [&] { return countersOf(*g_observer).dropped_invalid >= before.dropped_invalid + 2; }, 10.0))
+      << "dropped " << countersOf(*g_observer).dropped_invalid - before.dropped_invalid;
+  const MapperCounters after = countersOf(*g_observer);
   EXPECT_EQ(after.integrated, before.integrated);
   EXPECT_EQ(after.map_version, before.map_version);  // not a single voxel written
 
   // The mapper goes on with good images.
   ASSERT_TRUE(setSimulatorPaused(false));
   EXPECT_TRUE(
-      waitUntil([&] { return g_observer->counters().integrated > after.integrated; }, 10.0));
+      waitUntil([&] { return countersOf(*g_observer).integrated > after.integrated; }, 10.0));
 }
 
 }  // namespace
@@ -260,6 +220,8 @@ int main(int argc, char** argv) {
   private_node_handle.param("disparity_topic", settings.disparity_topic, settings.disparity_topic);
   private_node_handle.param("optical_frame", settings.optical_frame, settings.optical_frame);
   occupancy_fusion::MapObserver observer(node_handle);
+  observer.watch<nav_msgs::OccupancyGrid>("projected_map");
+  observer.watch<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
   occupancy_fusion::g_observer = &observer;
   // Advertised now, so the mapper is connected long before the malformed images go out.
   ros::Publisher disparity_publisher =

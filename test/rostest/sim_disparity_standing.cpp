@@ -37,16 +37,16 @@ struct Snapshot {
   std::vector<Eigen::Vector3d> centres;
 };
 
-class MapRecorder {
+// Every published voxel cloud with the number of images the mapper had integrated when it came.
+class CloudHistory {
  public:
-  explicit MapRecorder(ros::NodeHandle& node_handle) {
-    cloud_sub_ =
-        node_handle.subscribe("octomap_point_cloud_centers", 10, &MapRecorder::onCloud, this);
-    diagnostics_sub_ = node_handle.subscribe("/diagnostics", 10, &MapRecorder::onDiagnostics, this);
+  explicit CloudHistory(MapObserver* observer) : observer_(observer) {
+    observer->watch<sensor_msgs::PointCloud2>(
+        "octomap_point_cloud_centers", 10,
+        [this](const sensor_msgs::PointCloud2::ConstPtr& cloud) { record(*cloud); });
   }
   std::size_t integrated() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return integrated_;
+    return observer_->diagnosticCount("disparity mapping", "images integrated");
   }
   std::vector<Snapshot> snapshots() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -54,32 +54,21 @@ class MapRecorder {
   }
 
  private:
-  void onCloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
+  void record(const sensor_msgs::PointCloud2& cloud) {
     Snapshot snapshot;
-    snapshot.centres = cloudPoints(*cloud);
+    snapshot.centres = cloudPoints(cloud);
+    snapshot.images = integrated();
     std::lock_guard<std::mutex> lock(mutex_);
-    snapshot.images = integrated_;
     snapshots_.push_back(std::move(snapshot));
   }
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    for (const auto& status : array->status) {
-      if (!isTask(status, "disparity mapping")) continue;
-      for (const auto& entry : status.values) {
-        if (entry.key != "images integrated") continue;
-        std::lock_guard<std::mutex> lock(mutex_);
-        integrated_ = std::stoul(entry.value);
-      }
-    }
-  }
 
+  const MapObserver* observer_;
   mutable std::mutex mutex_;
-  std::size_t integrated_ = 0;
   std::vector<Snapshot> snapshots_;
-  ros::Subscriber cloud_sub_, diagnostics_sub_;
 };
 
 Settings g_settings;
-MapRecorder* g_recorder = nullptr;
+CloudHistory* g_recorder = nullptr;
 
 // Voxels whose centre lies within a voxel diagonal (a surface crossing the voxel) plus the depth
 // noise at 1.6 m (sigma_z = 0.3 px / (0.12 m * 262.4 px) * (1.6 m)^2 = 0.024 m) of a surface.
@@ -170,7 +159,8 @@ int main(int argc, char** argv) {
   private_node_handle.param("images", settings.images, settings.images);
   private_node_handle.param("resolution", settings.resolution, settings.resolution);
   private_node_handle.param("min_occupied", settings.min_occupied, settings.min_occupied);
-  occupancy_fusion::MapRecorder recorder(node_handle);
+  occupancy_fusion::MapObserver observer(node_handle);
+  occupancy_fusion::CloudHistory recorder(&observer);
   occupancy_fusion::g_recorder = &recorder;
   return occupancy_fusion::runTestsWhileSpinning();
 }

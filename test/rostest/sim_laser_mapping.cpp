@@ -28,50 +28,25 @@ struct Settings {
 };
 
 // Latest local grid and projected_map, and the LaserMapper's counters from /diagnostics.
-class Observer {
- public:
-  explicit Observer(ros::NodeHandle& node_handle) {
-    local_sub_ = node_handle.subscribe("local_grid", 1, &Observer::onLocal, this);
-    projected_sub_ = node_handle.subscribe("projected_map", 1, &Observer::onProjected, this);
-    diagnostics_sub_ = node_handle.subscribe("/diagnostics", 10, &Observer::onDiagnostics, this);
-  }
-  struct State {
-    nav_msgs::OccupancyGrid::ConstPtr local, projected;
-    std::size_t projected_count = 0;
-    std::size_t front_integrated = 0, rear_integrated = 0, front_rejected = 0;
-  };
-  State state() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return state_;
-  }
-
- private:
-  void onLocal(const nav_msgs::OccupancyGrid::ConstPtr& grid) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    state_.local = grid;
-  }
-  void onProjected(const nav_msgs::OccupancyGrid::ConstPtr& grid) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    state_.projected = grid;
-    ++state_.projected_count;
-  }
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& status : array->status) {
-      if (!isTask(status, "laser mapping")) continue;
-      state_.front_integrated = diagnosticCount(status, "front scans integrated");
-      state_.rear_integrated = diagnosticCount(status, "rear scans integrated");
-      state_.front_rejected = diagnosticCount(status, "front scans rejected");
-    }
-  }
-
-  mutable std::mutex mutex_;
-  State state_;
-  ros::Subscriber local_sub_, projected_sub_, diagnostics_sub_;
+// The laser layer's two products and the LaserMapper's counts, as last received.
+struct State {
+  nav_msgs::OccupancyGrid::ConstPtr local, projected;
+  std::size_t front_integrated = 0, rear_integrated = 0, front_rejected = 0;
 };
 
+State stateOf(const MapObserver& observer) {
+  State state;
+  state.local = observer.latest<nav_msgs::OccupancyGrid>("local_grid");
+  state.projected = observer.latest<nav_msgs::OccupancyGrid>("projected_map");
+  const DiagnosticValues values = observer.diagnostics("laser mapping");
+  state.front_integrated = countIn(values, "front scans integrated");
+  state.rear_integrated = countIn(values, "rear scans integrated");
+  state.front_rejected = countIn(values, "front scans rejected");
+  return state;
+}
+
 Settings g_settings;
-Observer* g_observer = nullptr;
+MapObserver* g_observer = nullptr;
 tf2_ros::Buffer* g_tf = nullptr;
 
 // Occupied cells lie within `tolerance` of a true surface in the scan plane; free cells' centres
@@ -112,19 +87,19 @@ double ratio(std::size_t part, std::size_t whole) {
 }
 
 // The state once the map is built and the robot stands still; later tests build on it.
-Observer::State g_frozen;
+State g_frozen;
 
 TEST(SimLaserMapping, BothProductsMatchGroundTruth) {
   const std::size_t min_scans = static_cast<std::size_t>(g_settings.min_scans) / 2;
   ASSERT_TRUE(waitUntil(
       [&] {
-        const auto s = g_observer->state();
+        const auto s = stateOf(*g_observer);
         return s.front_integrated >= min_scans && s.rear_integrated >= min_scans && s.local &&
                s.projected;
       },
       60.0))
-      << "front " << g_observer->state().front_integrated << ", rear "
-      << g_observer->state().rear_integrated << " scans integrated";
+      << "front " << stateOf(*g_observer).front_integrated << ", rear "
+      << stateOf(*g_observer).rear_integrated << " scans integrated";
   ASSERT_TRUE(setSimulatorPaused(true));
   // Scans in flight are integrated and published (the counts kept still over two diagnostics
   // periods); then both products stay as they are (the local grid is re-fused from the same
@@ -132,11 +107,11 @@ TEST(SimLaserMapping, BothProductsMatchGroundTruth) {
   std::size_t settled = 0;
   ASSERT_TRUE(waitUntilSteady(
       [] {
-        const auto s = g_observer->state();
+        const auto s = stateOf(*g_observer);
         return s.front_integrated + s.rear_integrated;
       },
       2.5, 20.0, &settled));
-  g_frozen = g_observer->state();
+  g_frozen = stateOf(*g_observer);
 
   // Local grid: in base_link, placed in the world by the robot's pose at the grid's stamp (the
   // newest scan's).
@@ -227,7 +202,7 @@ TEST(SimLaserMapping, BadScansAreRejectedAndLeaveTheMapUnchanged) {
   ros::NodeHandle node_handle;
   ros::Publisher bad = node_handle.advertise<sensor_msgs::LaserScan>("front_laser/scan", 5);
   ASSERT_TRUE(waitUntil([&] { return bad.getNumSubscribers() > 0; }, 5.0));
-  const Observer::State before = g_observer->state();
+  const State before = stateOf(*g_observer);
 
   sensor_msgs::LaserScan zero_increment = validLookingScan();
   zero_increment.angle_increment = 0.0f;
@@ -239,10 +214,10 @@ TEST(SimLaserMapping, BadScansAreRejectedAndLeaveTheMapUnchanged) {
     ros::WallDuration(0.2).sleep();
   }
   ASSERT_TRUE(waitUntil(
-      [&] { return g_observer->state().front_rejected >= before.front_rejected + 2; }, 5.0))
-      << "rejected " << g_observer->state().front_rejected - before.front_rejected;
+      [&] { return stateOf(*g_observer).front_rejected >= before.front_rejected + 2; }, 5.0))
+      << "rejected " << stateOf(*g_observer).front_rejected - before.front_rejected;
   ros::WallDuration(1.0).sleep();  // four MapServer cycles
-  const Observer::State after = g_observer->state();
+  const State after = stateOf(*g_observer);
   EXPECT_EQ(after.front_rejected, before.front_rejected + 2);
   EXPECT_EQ(after.front_integrated, before.front_integrated);
   // The MapServer sends projected_map only when the map changed: nothing new, or the same data.
@@ -251,7 +226,7 @@ TEST(SimLaserMapping, BadScansAreRejectedAndLeaveTheMapUnchanged) {
   // The mapper is still running: it maps again once the robot moves.
   ASSERT_TRUE(setSimulatorPaused(false));
   EXPECT_TRUE(waitUntil(
-      [&] { return g_observer->state().front_integrated >= after.front_integrated + 5; }, 10.0));
+      [&] { return stateOf(*g_observer).front_integrated >= after.front_integrated + 5; }, 10.0));
 }
 
 }  // namespace
@@ -268,7 +243,9 @@ int main(int argc, char** argv) {
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
   occupancy_fusion::g_tf = &tf_buffer;
-  occupancy_fusion::Observer observer(node_handle);
+  occupancy_fusion::MapObserver observer(node_handle);
+  observer.watch<nav_msgs::OccupancyGrid>("local_grid");
+  observer.watch<nav_msgs::OccupancyGrid>("projected_map");
   occupancy_fusion::g_observer = &observer;
   return occupancy_fusion::runTestsWhileSpinning();
 }

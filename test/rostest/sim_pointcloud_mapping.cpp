@@ -2,6 +2,7 @@
 // depth camera in the room scene, against the scene's analytic ground truth; then the services.
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -39,88 +40,58 @@ struct Settings {
 };
 
 // Keeps the latest message of every output and the counters from /diagnostics.
-class MapObserver {
- public:
-  explicit MapObserver(ros::NodeHandle& node_handle) {
-    grid_sub_ = node_handle.subscribe("projected_map", 1, &MapObserver::onGrid, this);
-    markers_sub_ =
-        node_handle.subscribe("occupied_cells_vis_array", 1, &MapObserver::onMarkers, this);
-    cloud_sub_ =
-        node_handle.subscribe("octomap_point_cloud_centers", 1, &MapObserver::onCloud, this);
-    diagnostics_sub_ = node_handle.subscribe("/diagnostics", 10, &MapObserver::onDiagnostics, this);
-  }
+// The three map outputs the test compares, as last received, and when each arrived.
+struct Snapshot {
+  nav_msgs::OccupancyGrid::ConstPtr grid;
+  visualization_msgs::MarkerArray::ConstPtr markers;
+  sensor_msgs::PointCloud2::ConstPtr cloud;
+  ros::WallTime grid_time, markers_time, cloud_time;
+};
 
-  struct Snapshot {
-    nav_msgs::OccupancyGrid::ConstPtr grid;
-    visualization_msgs::MarkerArray::ConstPtr markers;
-    sensor_msgs::PointCloud2::ConstPtr cloud;
-    ros::WallTime grid_time, markers_time, cloud_time;  // when each arrived
-  };
-  Snapshot snapshot() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return snapshot_;
-  }
-  std::size_t cloudsIntegrated() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return clouds_integrated_;
-  }
-  bool sawIncrementalRefresh() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return saw_incremental_refresh_;
-  }
-
- private:
-  void onGrid(const nav_msgs::OccupancyGrid::ConstPtr& grid) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    snapshot_.grid = grid;
-    snapshot_.grid_time = ros::WallTime::now();
-  }
-  void onMarkers(const visualization_msgs::MarkerArray::ConstPtr& markers) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    snapshot_.markers = markers;
-    snapshot_.markers_time = ros::WallTime::now();
-  }
-  void onCloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    snapshot_.cloud = cloud;
-    snapshot_.cloud_time = ros::WallTime::now();
-  }
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& status : array->status) {
-      if (isTask(status, "point cloud mapping")) {
-        clouds_integrated_ = std::stoul(diagnosticValue(status, "clouds integrated"));
-      }
-      if (isTask(status, "map publishing")) {
-        const std::size_t refreshed = std::stoul(diagnosticValue(status, "cache blocks refreshed"));
-        const std::size_t blocks = std::stoul(diagnosticValue(status, "map blocks"));
+void watchOutputs(MapObserver* observer, std::atomic<bool>* saw_incremental_refresh) {
+  observer->watch<nav_msgs::OccupancyGrid>("projected_map");
+  observer->watch<visualization_msgs::MarkerArray>("occupied_cells_vis_array");
+  observer->watch<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
+  observer->onDiagnostics(
+      [saw_incremental_refresh](const diagnostic_msgs::DiagnosticStatus& status) {
+        if (!isTask(status, "map publishing")) return;
+        const std::size_t refreshed = diagnosticCount(status, "cache blocks refreshed");
+        const std::size_t blocks = diagnosticCount(status, "map blocks");
         const bool full = diagnosticValue(status, "cache full rebuild") == "True";
         // A cycle that re-read some, but not all, blocks: cost followed the change.
-        if (!full && refreshed > 0 && refreshed < blocks) saw_incremental_refresh_ = true;
-      }
-    }
-  }
+        if (!full && refreshed > 0 && refreshed < blocks) *saw_incremental_refresh = true;
+      });
+}
 
-  mutable std::mutex mutex_;
-  Snapshot snapshot_;
-  std::size_t clouds_integrated_ = 0;
-  bool saw_incremental_refresh_ = false;
-  ros::Subscriber grid_sub_, markers_sub_, cloud_sub_, diagnostics_sub_;
-};
+Snapshot snapshotOf(const MapObserver& observer) {
+  Snapshot snapshot;
+  snapshot.grid = observer.latest<nav_msgs::OccupancyGrid>("projected_map");
+  snapshot.markers = observer.latest<visualization_msgs::MarkerArray>("occupied_cells_vis_array");
+  snapshot.cloud = observer.latest<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
+  snapshot.grid_time = observer.arrival("projected_map");
+  snapshot.markers_time = observer.arrival("occupied_cells_vis_array");
+  snapshot.cloud_time = observer.arrival("octomap_point_cloud_centers");
+  return snapshot;
+}
+
+std::size_t cloudsIntegrated(const MapObserver& observer) {
+  return observer.diagnosticCount("point cloud mapping", "clouds integrated");
+}
 
 Settings g_settings;
 MapObserver* g_observer = nullptr;
+std::atomic<bool> g_saw_incremental_refresh{false};
 
 // Waits for a snapshot whose three outputs all arrived after `since`.
-MapObserver::Snapshot snapshotAfter(const ros::WallTime& since, double timeout_seconds) {
+Snapshot snapshotAfter(const ros::WallTime& since, double timeout_seconds) {
   waitUntil(
       [&] {
-        const auto s = g_observer->snapshot();
+        const auto s = snapshotOf(*g_observer);
         return s.grid && s.markers && s.cloud && s.grid_time > since && s.markers_time > since &&
                s.cloud_time > since;
       },
       timeout_seconds);
-  return g_observer->snapshot();
+  return snapshotOf(*g_observer);
 }
 
 // Back to the cloud's own floats (exactly), so that equal voxel centres compare equal.
@@ -194,21 +165,21 @@ void skipPgmComments(std::istream& stream) {
 }
 
 // The snapshot taken once the map is complete and frozen; the service tests build on it.
-MapObserver::Snapshot g_final;
+Snapshot g_final;
 
 TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
   ASSERT_TRUE(waitUntil(
       [] {
-        return g_observer->cloudsIntegrated() >= static_cast<std::size_t>(g_settings.min_clouds);
+        return cloudsIntegrated(*g_observer) >= static_cast<std::size_t>(g_settings.min_clouds);
       },
       60.0))
-      << "only " << g_observer->cloudsIntegrated() << " clouds integrated";
+      << "only " << cloudsIntegrated(*g_observer) << " clouds integrated";
   ASSERT_TRUE(setSimulatorPaused(true));
   // Let clouds in flight be integrated and published (the count kept still over two diagnostics
   // periods); then the map stays as it is, and the files saved below must hold exactly it.
   std::size_t settled = 0;
-  ASSERT_TRUE(waitUntilSteady([] { return g_observer->cloudsIntegrated(); }, 2.5, 20.0, &settled));
-  g_final = g_observer->snapshot();
+  ASSERT_TRUE(waitUntilSteady([] { return cloudsIntegrated(*g_observer); }, 2.5, 20.0, &settled));
+  g_final = snapshotOf(*g_observer);
   ASSERT_TRUE(g_final.grid && g_final.markers && g_final.cloud);
 
   const sim::Scene scene = sim::makeRoomScene();
@@ -272,7 +243,7 @@ TEST(SimPointCloudMapping, MapMatchesGroundTruth) {
   EXPECT_EQ(cellAt(grid, 3.0, 0.0), 0);
 
   // Publishing re-read only the changed blocks while the map grew.
-  EXPECT_TRUE(g_observer->sawIncrementalRefresh());
+  EXPECT_TRUE(g_saw_incremental_refresh.load());
 }
 
 TEST(SimPointCloudMapping, SaveMapWritesReadableFiles) {
@@ -349,7 +320,7 @@ TEST(SimPointCloudMapping, ClearBoxEmptiesTheBox) {
   ASSERT_GT(inside_before, 200u);
   const ros::WallTime call_time = ros::WallTime::now();
   ASSERT_TRUE(ros::service::call("/map_server/clear_bbx", clear));
-  const MapObserver::Snapshot after = snapshotAfter(call_time, 5.0);
+  const Snapshot after = snapshotAfter(call_time, 5.0);
   ASSERT_GT(after.cloud_time, call_time);
   const std::vector<Eigen::Vector3d> remaining = cloudPoints(*after.cloud);
   EXPECT_EQ(countInBox(remaining, min, max), 0u);
@@ -363,7 +334,7 @@ TEST(SimPointCloudMapping, ResetEmptiesTheMap) {
   const ros::WallTime call_time = ros::WallTime::now();
   std_srvs::Empty reset;
   ASSERT_TRUE(ros::service::call("/map_server/reset", reset));
-  const MapObserver::Snapshot after = snapshotAfter(call_time, 5.0);
+  const Snapshot after = snapshotAfter(call_time, 5.0);
   ASSERT_GT(after.cloud_time, call_time);
   EXPECT_EQ(after.cloud->width * after.cloud->height, 0u);
   ASSERT_EQ(after.markers->markers.size(), 1u);
@@ -386,6 +357,7 @@ int main(int argc, char** argv) {
   private_node_handle.param("occupancy_min_z", settings.min_z, settings.min_z);
   private_node_handle.param("occupancy_max_z", settings.max_z, settings.max_z);
   occupancy_fusion::MapObserver observer(node_handle);
+  occupancy_fusion::watchOutputs(&observer, &occupancy_fusion::g_saw_incremental_refresh);
   occupancy_fusion::g_observer = &observer;
   return occupancy_fusion::runTestsWhileSpinning();
 }

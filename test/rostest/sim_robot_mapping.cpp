@@ -46,82 +46,20 @@ const std::vector<MapperUnderTest> kMappers = {
 };
 
 // Every key of a mapper's latest diagnostics status, by task.
-using Values = std::map<std::string, std::string>;
+using Values = DiagnosticValues;
 
 // Counts the frames sent on every input topic and keeps the fused map and the diagnostics.
-class Observer {
- public:
-  explicit Observer(ros::NodeHandle& node_handle) {
-    subscribers_.push_back(node_handle.subscribe<sensor_msgs::Image>(
-        "camera/depth/image", 100, [this](const auto&) { count("camera/depth/image"); }));
-    subscribers_.push_back(node_handle.subscribe<stereo_msgs::DisparityImage>(
-        "stereo/disparity", 100, [this](const auto&) { count("stereo/disparity"); }));
-    for (const std::string topic : {"front_laser/scan", "rear_laser/scan"}) {
-      subscribers_.push_back(node_handle.subscribe<sensor_msgs::LaserScan>(
-          topic, 100, [this, topic](const auto&) { count(topic); }));
-    }
-    subscribers_.push_back(node_handle.subscribe<sensor_msgs::PointCloud2>(
-        "camera/depth/points", 100, [this](const auto&) { count("camera/depth/points"); }));
-    subscribers_.push_back(node_handle.subscribe<sensor_msgs::PointCloud2>(
-        "octomap_point_cloud_centers", 1, [this](const sensor_msgs::PointCloud2::ConstPtr& m) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          centres_ = m;
-        }));
-    subscribers_.push_back(node_handle.subscribe<nav_msgs::OccupancyGrid>(
-        "projected_map", 1, [this](const nav_msgs::OccupancyGrid::ConstPtr& m) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          projected_ = m;
-        }));
-    subscribers_.push_back(node_handle.subscribe<diagnostic_msgs::DiagnosticArray>(
-        "/diagnostics", 50, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          for (const auto& status : array->status) {
-            Values& values = diagnostics_[status.name];
-            values.clear();
-            for (const auto& entry : status.values) values[entry.key] = entry.value;
-          }
-        }));
-  }
-
-  // The spinner's threads may be inside a callback while the test suite tears down: shut the
-  // subscriptions down first (shutdown() waits for a running callback), then the members they use
-  // are destroyed.
-  ~Observer() {
-    for (ros::Subscriber& subscriber : subscribers_) subscriber.shutdown();
-  }
-
-  std::size_t sent(const std::string& topic) const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const auto found = sent_.find(topic);
-    return found == sent_.end() ? 0 : found->second;
-  }
-  Values diagnostics(const std::string& task) const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const auto found = diagnostics_.find(task);
-    return found == diagnostics_.end() ? Values() : found->second;
-  }
-  sensor_msgs::PointCloud2::ConstPtr centres() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return centres_;
-  }
-  nav_msgs::OccupancyGrid::ConstPtr projected() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return projected_;
-  }
-
- private:
-  void count(const std::string& topic) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++sent_[topic];
-  }
-
-  mutable std::mutex mutex_;
-  std::vector<ros::Subscriber> subscribers_;
-  std::map<std::string, std::size_t> sent_;
-  std::map<std::string, Values> diagnostics_;
-  sensor_msgs::PointCloud2::ConstPtr centres_;
-  nav_msgs::OccupancyGrid::ConstPtr projected_;
-};
+// The sensors' topics (the frames the simulator sent, as a second subscriber sees them) and the
+// map's outputs.
+void watchRobot(MapObserver* observer) {
+  observer->watch<sensor_msgs::Image>("camera/depth/image", 100);
+  observer->watch<stereo_msgs::DisparityImage>("stereo/disparity", 100);
+  observer->watch<sensor_msgs::LaserScan>("front_laser/scan", 100);
+  observer->watch<sensor_msgs::LaserScan>("rear_laser/scan", 100);
+  observer->watch<sensor_msgs::PointCloud2>("camera/depth/points", 100);
+  observer->watch<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
+  observer->watch<nav_msgs::OccupancyGrid>("projected_map");
+}
 
 double number(const Values& values, const std::string& key) {
   const auto found = values.find(key);
@@ -153,21 +91,22 @@ class SimRobotMapping : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     ros::NodeHandle node_handle;
-    observer_ = new Observer(node_handle);
+    observer_ = new MapObserver(node_handle);
+    watchRobot(observer_);
   }
   static void TearDownTestSuite() { delete observer_; }
-  static Observer* observer_;
+  static MapObserver* observer_;
 };
-Observer* SimRobotMapping::observer_ = nullptr;
+MapObserver* SimRobotMapping::observer_ = nullptr;
 
 TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
-  Observer& observer = *observer_;
+  MapObserver& observer = *observer_;
   // Run until every camera sent min_images and the scanners min_scans.
   ASSERT_TRUE(waitUntil(
       [&] {
-        return observer.sent("camera/depth/image") >= std::size_t(g_settings.min_images) &&
-               observer.sent("stereo/disparity") >= std::size_t(g_settings.min_images) &&
-               observer.sent("front_laser/scan") + observer.sent("rear_laser/scan") >=
+        return observer.received("camera/depth/image") >= std::size_t(g_settings.min_images) &&
+               observer.received("stereo/disparity") >= std::size_t(g_settings.min_images) &&
+               observer.received("front_laser/scan") + observer.received("rear_laser/scan") >=
                    std::size_t(g_settings.min_scans);
       },
       60.0));
@@ -196,7 +135,7 @@ TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
     const Values values = observer.diagnostics(mapper.task);
     for (const std::string& key : kUniformKeys) EXPECT_EQ(values.count(key), 1u) << key;
     std::size_t sent = 0;
-    for (const std::string& topic : mapper.topics) sent += observer.sent(topic);
+    for (const std::string& topic : mapper.topics) sent += observer.received(topic);
     const std::size_t received = count(values, "frames received");
     const std::size_t integrated = count(values, "frames integrated");
     // The simulator sends to both subscribers alike; which of them connected first may differ
@@ -234,7 +173,8 @@ TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
 
   const sim::Scene scene = sim::makeRoomScene();
   // The 3D map (depth, disparity and point cloud): occupied voxel centres on the true surfaces.
-  const sensor_msgs::PointCloud2::ConstPtr centres_message = observer.centres();
+  const sensor_msgs::PointCloud2::ConstPtr centres_message =
+      observer.latest<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
   ASSERT_TRUE(centres_message);
   const std::vector<Eigen::Vector3d> centres = cloudPoints(*centres_message);
   const double tolerance = std::sqrt(3.0) * 0.05 + 0.1;  // a voxel diagonal and stereo error
@@ -246,7 +186,8 @@ TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
 
   // projected_map: the 3D map's column projection fused with the laser layer; its occupied cells
   // lie on a solid's outline.
-  const nav_msgs::OccupancyGrid::ConstPtr projected = observer.projected();
+  const nav_msgs::OccupancyGrid::ConstPtr projected =
+      observer.latest<nav_msgs::OccupancyGrid>("projected_map");
   ASSERT_TRUE(projected);
   std::size_t occupied = 0, on_outline = 0;
   for (std::uint32_t y = 0; y < projected->info.height; ++y) {
