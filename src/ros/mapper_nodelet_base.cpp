@@ -48,7 +48,7 @@ void MapperNodeletBase::startDiagnostics(const std::string& task_name,
   diagnostics_->setHardwareID("map '" + map_->name() + "'");
   diagnostics_->add(task_name, [this, fill = std::move(fill)](
                                    diagnostic_updater::DiagnosticStatusWrapper& status) {
-    frames_.fill(&status);
+    for (const auto& [key, value] : frames_.report()) status.add(key, value);
     {
       const std::lock_guard<std::mutex> lock(stamps_mutex_);
       status.add("time jumps back (tf buffer cleared)", backwards_jumps_);

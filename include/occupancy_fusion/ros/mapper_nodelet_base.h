@@ -30,7 +30,7 @@
 
 #include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/params/parameter_source.h"
-#include "occupancy_fusion/ros/frame_statistics.h"
+#include "occupancy_fusion/mapping/frame_statistics.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/map_registry.h"
 

@@ -1,8 +1,8 @@
-// What every mapper reports about its input in its diagnostics, counted in one place (the
-// MapperNodeletBase) so that the four mappers report it alike: frames received and their rate,
-// frames integrated and the time each took, frames dropped by reason, and how many of those drops
-// were tf failures. Thread-safe: the tf2 filters, the nodelet's callbacks and the diagnostics
-// timer may run on different threads.
+// What every mapper reports about its input, counted in one place (the nodelets' MapperNodeletBase
+// puts it into their diagnostics) so that the four mappers report it alike: frames received and
+// their rate, frames integrated and the time each took, frames dropped by reason, and how many of
+// those drops were tf failures. Thread-safe: the tf2 filters, the nodelet's callbacks and the
+// diagnostics timer may run on different threads.
 #pragma once
 
 #include <chrono>
@@ -10,9 +10,8 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include <diagnostic_updater/DiagnosticStatusWrapper.h>
 
 namespace occupancy_fusion {
 
@@ -49,8 +48,9 @@ class FrameStatistics {
   // nor dropped yet: held in the tf2 filter), "frames dropped", one "frames dropped (<reason>)"
   // per reason, "tf failures", "integration ms (last)", "integration ms (mean)" and
   // "integration ms (max)" (per integrated frame: conversion and core call).
-  void fill(diagnostic_updater::DiagnosticStatusWrapper* status,
-            Clock::time_point now = Clock::now());
+  // Each value as diagnostic_updater writes it (operator<< of the count or double).
+  using Report = std::vector<std::pair<std::string, std::string>>;
+  Report report(Clock::time_point now = Clock::now());
 
  private:
   static bool isTfReason(const std::string& reason);

@@ -1,6 +1,7 @@
-#include "occupancy_fusion/ros/frame_statistics.h"
+#include "occupancy_fusion/mapping/frame_statistics.h"
 
 #include <algorithm>
+#include <sstream>
 
 namespace occupancy_fusion {
 
@@ -59,8 +60,18 @@ std::size_t FrameStatistics::droppedTotal() const {
 
 bool FrameStatistics::isTfReason(const std::string& reason) { return reason.rfind("tf: ", 0) == 0; }
 
-void FrameStatistics::fill(diagnostic_updater::DiagnosticStatusWrapper* status,
-                           Clock::time_point now) {
+namespace {
+
+template <typename Value>
+void add(FrameStatistics::Report* report, const std::string& key, const Value& value) {
+  std::ostringstream text;
+  text << value;
+  report->emplace_back(key, text.str());
+}
+
+}  // namespace
+
+FrameStatistics::Report FrameStatistics::report(Clock::time_point now) {
   const std::lock_guard<std::mutex> lock(mutex_);
   const double seconds = std::chrono::duration<double>(now - last_fill_).count();
   const double rate =
@@ -75,18 +86,20 @@ void FrameStatistics::fill(diagnostic_updater::DiagnosticStatusWrapper* status,
   }
   // A frame is counted as received before the filter decides on it, so this cannot underflow.
   const std::size_t waiting = received_ - std::min(received_, integrated_ + dropped);
-  status->add("frames received", received_);
-  status->add("input rate (Hz)", rate);
-  status->add("frames integrated", integrated_);
-  status->add("frames waiting", waiting);
-  status->add("frames dropped", dropped);
+  Report report;
+  add(&report, "frames received", received_);
+  add(&report, "input rate (Hz)", rate);
+  add(&report, "frames integrated", integrated_);
+  add(&report, "frames waiting", waiting);
+  add(&report, "frames dropped", dropped);
   for (const auto& [reason, count] : dropped_)
-    status->add("frames dropped (" + reason + ")", count);
-  status->add("tf failures", tf_failures);
-  status->add("integration ms (last)", last_milliseconds_);
-  status->add("integration ms (mean)",
-              integrated_ > 0 ? total_milliseconds_ / static_cast<double>(integrated_) : 0.0);
-  status->add("integration ms (max)", max_milliseconds_);
+    add(&report, "frames dropped (" + reason + ")", count);
+  add(&report, "tf failures", tf_failures);
+  add(&report, "integration ms (last)", last_milliseconds_);
+  add(&report, "integration ms (mean)",
+      integrated_ > 0 ? total_milliseconds_ / static_cast<double>(integrated_) : 0.0);
+  add(&report, "integration ms (max)", max_milliseconds_);
+  return report;
 }
 
 }  // namespace occupancy_fusion
