@@ -20,7 +20,7 @@
 
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/benchmarks/peer_mappers.h"
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sensors/seven_scenes_folder.h"

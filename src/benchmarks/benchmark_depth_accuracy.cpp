@@ -17,7 +17,7 @@
 
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/eval/surface_accuracy.h"
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scenes.h"

@@ -27,7 +27,7 @@
 
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"

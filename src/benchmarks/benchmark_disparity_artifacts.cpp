@@ -25,7 +25,7 @@
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/eval/stereo_corridor.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/stereo_camera.h"

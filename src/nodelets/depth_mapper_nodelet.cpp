@@ -30,7 +30,7 @@
 #include <sensor_msgs/image_encodings.h>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/params/depth_config_reader.h"
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/depth_messages.h"

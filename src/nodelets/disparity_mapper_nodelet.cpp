@@ -25,7 +25,7 @@
 #include <stereo_msgs/DisparityImage.h>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/params/stereo_config_reader.h"
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/disparity_messages.h"

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sim/scene.h"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "occupancy_fusion/eval/stereo_corridor.h"
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/sim/scene.h"
 #include "occupancy_fusion/sim/stereo_camera.h"
 

@@ -30,8 +30,8 @@
 
 #include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/saved_map.h"

@@ -4,7 +4,7 @@
 // PyramidDepthConfig's in-class defaults.
 #pragma once
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_config.h"
 #include "occupancy_fusion/params/parameter_source.h"
 
 namespace occupancy_fusion {

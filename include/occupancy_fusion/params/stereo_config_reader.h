@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_config.h"
 #include "occupancy_fusion/params/parameter_source.h"
 
 namespace occupancy_fusion {

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "occupancy_fusion/eval/surface_accuracy.h"
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/params/depth_config_reader.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scenes.h"

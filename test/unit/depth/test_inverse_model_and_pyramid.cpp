@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 
 namespace occupancy_fusion {
 namespace {

@@ -7,7 +7,7 @@
 #include <optional>
 #include <vector>
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 
 namespace occupancy_fusion {
 namespace {

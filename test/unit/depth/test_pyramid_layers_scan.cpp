@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "occupancy_fusion/integrators/pyramid_depth_integrator.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "pyramid_reference_scan.h"
 
 namespace occupancy_fusion {

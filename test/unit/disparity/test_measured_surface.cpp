@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "occupancy_fusion/integrators/measured_surface.h"
+#include "occupancy_fusion/integrators/stereo/measured_surface.h"
 
 namespace occupancy_fusion {
 namespace {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 
 namespace occupancy_fusion {
 namespace {

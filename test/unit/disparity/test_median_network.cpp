@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "occupancy_fusion/integrators/median_network.h"
+#include "occupancy_fusion/integrators/stereo/median_network.h"
 
 namespace occupancy_fusion {
 namespace {

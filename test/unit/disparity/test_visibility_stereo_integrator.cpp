@@ -14,7 +14,7 @@
 
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 
 namespace occupancy_fusion {
 namespace {

@@ -1,4 +1,4 @@
-#include "occupancy_fusion/integrators/visibility_stereo_integrator.h"
+#include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 
 #include <omp.h>
 
@@ -12,141 +12,12 @@
 
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/map/spatial_key.h"
+#include "ray_bundles.h"
 
 namespace occupancy_fusion {
 
 // ---------------------------------------------------------------------------------------------
-// Configuration and the equations
-
-std::string toString(StereoIntegrationMethod method) {
-  return method == StereoIntegrationMethod::kOctomap ? "octomap" : "visibility";
-}
-
-StereoIntegrationMethod stereoIntegrationMethodFromString(const std::string& name) {
-  if (name == "visibility") return StereoIntegrationMethod::kVisibility;
-  if (name == "octomap") return StereoIntegrationMethod::kOctomap;
-  throw std::invalid_argument("stereo method must be visibility or octomap, not '" + name + "'");
-}
-
-std::string toString(UnknownNeighbours policy) {
-  switch (policy) {
-    case UnknownNeighbours::kPrior:
-      return "prior";
-    case UnknownNeighbours::kMeasured:
-      return "measured";
-    case UnknownNeighbours::kKnownOnly:
-      break;
-  }
-  return "known_only";
-}
-
-UnknownNeighbours unknownNeighboursFromString(const std::string& name) {
-  if (name == "known_only") return UnknownNeighbours::kKnownOnly;
-  if (name == "prior") return UnknownNeighbours::kPrior;
-  if (name == "measured") return UnknownNeighbours::kMeasured;
-  throw std::invalid_argument("unknown_neighbours must be known_only, prior or measured, not '" +
-                              name + "'");
-}
-
-std::string toString(StereoParameterSet set) {
-  switch (set) {
-    case StereoParameterSet::kFastExpansion:
-      return "fast_expansion";
-    case StereoParameterSet::kMeasured:
-      return "measured";
-    case StereoParameterSet::kTableI:
-      break;
-  }
-  return "table_i";
-}
-
-StereoParameterSet stereoParameterSetFromString(const std::string& name) {
-  if (name == "table_i") return StereoParameterSet::kTableI;
-  if (name == "fast_expansion") return StereoParameterSet::kFastExpansion;
-  if (name == "measured") return StereoParameterSet::kMeasured;
-  throw std::invalid_argument("parameter set must be table_i, fast_expansion or measured, not '" +
-                              name + "'");
-}
-
-VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set) {
-  VisibilityStereoConfig config;  // Table I
-  if (set == StereoParameterSet::kFastExpansion) {
-    // See StereoParameterSet: deeper rays into unknown space, stronger partial-visibility misses.
-    config.visibility_min = 0.003;
-    config.prob_hit_invisible = 0.2;
-  }
-  if (set == StereoParameterSet::kMeasured)
-    config.unknown_neighbours = UnknownNeighbours::kMeasured;
-  return config;
-}
-
-namespace {
-
-void requireOpenUnit(double value, const char* field) {
-  if (!(value > 0 && value < 1)) {
-    throw std::invalid_argument(std::string("VisibilityStereoConfig.") + field +
-                                " must be in (0, 1)");
-  }
-}
-
-}  // namespace
-
-void VisibilityStereoConfig::validate() const {
-  if (method != StereoIntegrationMethod::kVisibility &&
-      method != StereoIntegrationMethod::kOctomap) {
-    throw std::invalid_argument("VisibilityStereoConfig.method is not a known method");
-  }
-  requireOpenUnit(prob_hit_visible_occupied, "prob_hit_visible_occupied");
-  requireOpenUnit(prob_hit_visible_free, "prob_hit_visible_free");
-  requireOpenUnit(prob_hit_invisible, "prob_hit_invisible");
-  if (!(prob_hit_visible_occupied > prob_hit_visible_free)) {
-    // Otherwise a hit would lower the occupancy of a visible voxel.
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.prob_hit_visible_"
-        "occupied must exceed prob_hit_visible_free");
-  }
-  if (!(prob_visible_if_occluded >= 0 && prob_visible_if_occluded <= 1)) {
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.prob_visible_if_occluded must be in [0, 1]");
-  }
-  if (!(prob_visible_if_not_occluded >= 0 && prob_visible_if_not_occluded <= 1)) {
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.prob_visible_if_not_"
-        "occluded must be in [0, 1]");
-  }
-  if (!(visibility_max > 0 && visibility_max <= 1)) {
-    throw std::invalid_argument("VisibilityStereoConfig.visibility_max must be in (0, 1]");
-  }
-  if (!(visibility_min > 0 && visibility_min <= visibility_max)) {
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.visibility_min must be in (0, visibility_max]");
-  }
-  requireOpenUnit(unknown_occupancy, "unknown_occupancy");
-  if (unknown_neighbours != UnknownNeighbours::kKnownOnly &&
-      unknown_neighbours != UnknownNeighbours::kPrior &&
-      unknown_neighbours != UnknownNeighbours::kMeasured) {
-    throw std::invalid_argument("VisibilityStereoConfig.unknown_neighbours is not a known policy");
-  }
-  if (!(unknown_neighbour_occupancy >= 0 && unknown_neighbour_occupancy <= 1)) {
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.unknown_neighbour_occupancy must be in [0, 1]");
-  }
-  if (!(inside_stop_probability > 0.5 && inside_stop_probability < 1)) {
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.inside_stop_probability must be in (0.5, 1)");
-  }
-  if (std::isnan(max_range)) {
-    throw std::invalid_argument("VisibilityStereoConfig.max_range must not be NaN");
-  }
-  measured_surface.validate();
-  if (!(measured_sigma_min_voxels > 0 && measured_sigma_max_voxels >= measured_sigma_min_voxels &&
-        std::isfinite(measured_sigma_max_voxels))) {
-    throw std::invalid_argument(
-        "VisibilityStereoConfig.measured_sigma_min_voxels must be positive and at most "
-        "measured_sigma_max_voxels (finite)");
-  }
-  disparity.validate();
-}
+// The equations (Eq. 3-8)
 
 NormalCdfTable::NormalCdfTable() : values_(kSize + 1) {
   for (int i = 0; i < kSize; ++i) {
@@ -565,99 +436,6 @@ class RayCaster {
   std::vector<CachedVoxel> current_;
   RayCounters counters_;
 };
-
-bool isUsable(const Eigen::Vector3d& point, const Eigen::Vector3d& origin, double resolution,
-              bool needs_direction) {
-  if (!point.allFinite()) return false;
-  const double range = (point - origin).norm();
-  if (needs_direction && !(range > 0)) return false;  // the walk past the point needs a direction
-  // Keys hold 2^20 voxels each way; the walk may continue a few sigma past the
-  // point.
-  const double limit = 0.5 * kMaxOffset * resolution;
-  return ((point - origin).array().abs() < limit).all();
-}
-
-bool isUsableRay(const Eigen::Vector3d& point, float sigma, const Eigen::Vector3d& origin,
-                 double resolution, bool needs_direction) {
-  return isUsable(point, origin, resolution, needs_direction) && std::isfinite(sigma) && sigma >= 0;
-}
-
-// Per point: the key of its end voxel and its squared range, or kUnusableRay. Independent per
-// point, so computed on every thread before the (sequential) grouping.
-constexpr std::uint64_t kUnusableRay = ~std::uint64_t{0};  // packKey uses 63 bits
-constexpr std::size_t kParallelPoints = 8192;
-
-struct RayEnd {
-  std::uint64_t key;
-  double squared_range;
-};
-
-std::vector<RayEnd> rayEnds(const std::vector<Eigen::Vector3f>& points,
-                            const std::vector<float>& sigmas, const Eigen::Vector3d& origin,
-                            double resolution, bool needs_direction) {
-  std::vector<RayEnd> ends(points.size());
-  const long count = static_cast<long>(points.size());
-#pragma omp parallel for schedule(static) if (points.size() >= kParallelPoints)
-  for (long i = 0; i < count; ++i) {
-    const Eigen::Vector3d point = points[i].cast<double>();
-    ends[i] = isUsableRay(point, sigmas[i], origin, resolution, needs_direction)
-                  ? RayEnd{packKey(voxelIndexOf(point, resolution)), (point - origin).squaredNorm()}
-                  : RayEnd{kUnusableRay, 0.0};
-  }
-  return ends;
-}
-
-// bundle_rays: per end voxel the nearest and the farthest usable point (see
-// VisibilityStereoConfig::bundle_rays), in the order of each voxel's first point, so that
-// neighbouring pixels stay neighbouring rays for the previous-ray cache; one ray where they are the
-// same point, and always one for OctoMap's update, whose ray ends at the voxel's centre.
-// Neighbouring pixels mostly share their end voxel, so the last voxel is checked
-// before the hash table.
-std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3f>& points,
-                                                const std::vector<float>& sigmas,
-                                                const Eigen::Vector3d& origin, double resolution,
-                                                bool visibility_mode, std::size_t* skipped) {
-  const bool needs_direction = visibility_mode, needs_depth = visibility_mode;
-  struct Bundle {
-    std::uint32_t nearest, farthest;
-    double nearest_squared_range, farthest_squared_range;
-  };
-  const std::vector<RayEnd> ends = rayEnds(points, sigmas, origin, resolution, needs_direction);
-  std::vector<Bundle> bundles;
-  SpatialKeyMap<std::uint32_t> bundle_of_voxel;
-  std::uint64_t last_key = kUnusableRay;
-  std::uint32_t last_bundle = 0;
-  for (std::uint32_t i = 0; i < ends.size(); ++i) {
-    const auto [key, squared_range] = ends[i];
-    if (key == kUnusableRay) {
-      ++*skipped;
-      continue;
-    }
-    if (key != last_key) {
-      const auto [it, inserted] =
-          bundle_of_voxel.try_emplace(key, static_cast<std::uint32_t>(bundles.size()));
-      if (inserted) bundles.push_back({i, i, squared_range, squared_range});
-      last_key = key;
-      last_bundle = it->second;
-    }
-    Bundle& bundle = bundles[last_bundle];
-    if (squared_range < bundle.nearest_squared_range) {  // ties: the first point
-      bundle.nearest = i;
-      bundle.nearest_squared_range = squared_range;
-    }
-    if (squared_range > bundle.farthest_squared_range) {
-      bundle.farthest = i;
-      bundle.farthest_squared_range = squared_range;
-    }
-  }
-  std::vector<std::uint32_t> rays;
-  rays.reserve(2 * bundles.size());
-  for (const Bundle& bundle : bundles) {
-    rays.push_back(bundle.nearest);
-    if (needs_depth && bundle.farthest != bundle.nearest) rays.push_back(bundle.farthest);
-  }
-  return rays;
-}
 
 // measured_prior: the prior of Eq. 4-6 of each never-observed voxel from the frame's
 // measurement, where the measurement says less than unknown_occupancy. measured_inside: P(I_v)

@@ -1,4 +1,4 @@
-#include "occupancy_fusion/integrators/median_network.h"
+#include "occupancy_fusion/integrators/stereo/median_network.h"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "occupancy_fusion/integrators/measured_surface.h"
+#include "occupancy_fusion/integrators/stereo/measured_surface.h"
 
 #include <omp.h>
 #include <algorithm>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "occupancy_fusion/integrators/median_network.h"
+#include "occupancy_fusion/integrators/stereo/median_network.h"
 
 namespace occupancy_fusion {
 

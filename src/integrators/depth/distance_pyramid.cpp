@@ -1,0 +1,421 @@
+// Eq. 6, 10, 11: the distance image and its pyramid of layers.
+#include "occupancy_fusion/integrators/depth/distance_pyramid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <vector>
+
+#include "depth_detail.h"
+
+namespace occupancy_fusion {
+
+using depth_detail::kInfinity;
+using depth_detail::kNaN;
+using depth_detail::kParallelPixels;
+
+namespace {
+
+// Layers 1 .. kScannedLevels - 1 (cells of 2 x 2 and 4 x 4 pixels) are scanned from M directly;
+// the coarser ones are merged level by level from per-cell distance buckets (see
+// DistanceBuckets), which costs one pass over M for all of them.
+constexpr int kScannedLevels = 3;
+
+}  // namespace
+
+// The two largest and two smallest distinct distances of a cell that fall into one bucket.
+struct BucketExtremes {
+  float max1 = -kInfinity, max2 = -kInfinity;
+  float min1 = kInfinity, min2 = kInfinity;
+
+  bool empty() const { return max1 == -kInfinity; }
+  void addMax(float x) {
+    if (x > max1) {
+      max2 = max1;
+      max1 = x;
+    } else if (x < max1 && x > max2) {
+      max2 = x;
+    }
+  }
+  void addMin(float x) {
+    if (x < min1) {
+      min2 = min1;
+      min1 = x;
+    } else if (x > min1 && x < min2) {
+      min2 = x;
+    }
+  }
+  void add(float x) {
+    addMax(x);
+    addMin(x);
+  }
+  void merge(const BucketExtremes& other) {
+    addMax(other.max1);
+    addMax(other.max2);
+    addMin(other.min1);
+    addMin(other.min2);
+  }
+};
+
+// Eq. 10 for all coarse layers at once. "Closest to t_j" is the largest distance <= t_j or the
+// smallest >= t_j, and both compose over sub-blocks by max / min. The thresholds t_0 > ... >
+// t_{L-1} cut the distances into L + 1 buckets (bucket k: t_k <= d < t_{k-1}); a cell keeps,
+// per bucket, its two largest and two smallest distinct distances, which merge over 2 x 2
+// children exactly. The second values decide whether the float score |d - t_j| of the winner is
+// shared by another distance of the cell (rounding, or one on each side of t_j): the scan would
+// then keep the first such pixel in its order, so such a cell is scanned instead.
+class DistanceBuckets {
+ public:
+  explicit DistanceBuckets(const std::vector<float>& thresholds)
+      : thresholds_(thresholds), buckets_(static_cast<int>(thresholds.size()) + 1) {}
+
+  void resize(int width, int height) {
+    width_ = width;
+    height_ = height;
+    cells_.assign(static_cast<std::size_t>(width) * height * buckets_, BucketExtremes());
+  }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  BucketExtremes* cell(int u, int v) {
+    return &cells_[(static_cast<std::size_t>(v) * width_ + u) * buckets_];
+  }
+  const BucketExtremes* cell(int u, int v) const {
+    return &cells_[(static_cast<std::size_t>(v) * width_ + u) * buckets_];
+  }
+  int bucketOf(float distance) const {
+    int bucket = 0;
+    for (float threshold : thresholds_) bucket += threshold > distance;
+    return bucket;
+  }
+  void mergeCell(const BucketExtremes* child, BucketExtremes* parent) const {
+    for (int k = 0; k < buckets_; ++k) parent[k].merge(child[k]);
+  }
+  // The distance of the cell closest to t_level as the scan keeps it (NaN: no valid one);
+  // false when another distance of the cell has the same score, i.e. the scan order decides.
+  bool closest(const BucketExtremes* cell, int level, float* kept) const;
+
+ private:
+  std::vector<float> thresholds_;
+  int buckets_;
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<BucketExtremes> cells_;
+};
+
+namespace {
+// Work of one pass over a bucket layer: cells x buckets.
+long cellBucketCount(const DistanceBuckets& buckets, int levels) {
+  return static_cast<long>(buckets.width()) * buckets.height() * (levels + 1);
+}
+}  // namespace
+
+bool DistanceBuckets::closest(const BucketExtremes* cell, int level, float* kept) const {
+  const float target = thresholds_[static_cast<std::size_t>(level)];
+  if (cell[level].min1 == target) {  // score 0, and only t_level itself scores 0
+    *kept = target;
+    return true;
+  }
+  // Below t_level: buckets level + 1 ... L; at or above: buckets level ... 0.
+  float below = -kInfinity, below_next = -kInfinity;
+  for (int k = level + 1; k < buckets_ && below_next == -kInfinity; ++k) {
+    if (cell[k].empty()) continue;
+    if (below == -kInfinity) {
+      below = cell[k].max1;
+      below_next = cell[k].max2;
+    } else {
+      below_next = cell[k].max1;
+    }
+  }
+  float above = kInfinity, above_next = kInfinity;
+  for (int k = level; k >= 0 && above_next == kInfinity; --k) {
+    if (cell[k].empty()) continue;
+    if (above == kInfinity) {
+      above = cell[k].min1;
+      above_next = cell[k].min2;
+    } else {
+      above_next = cell[k].min1;
+    }
+  }
+  const float below_score = std::abs(below - target);  // the scan's score, same float steps
+  const float above_score = std::abs(above - target);
+  if (below == -kInfinity && above == kInfinity) {
+    *kept = kNaN;
+    return true;
+  }
+  if (below_score == above_score) return false;
+  const bool take_below = below_score < above_score;
+  const float winner = take_below ? below : above;
+  const float runner_up = take_below ? below_next : above_next;
+  *kept = winner;
+  return std::abs(runner_up - target) != std::abs(winner - target);
+}
+
+DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
+                                 double t0, int levels, double max_range,
+                                 PyramidSelection selection,
+                                 const std::function<double(double)>& reach_of_farthest)
+    : thresholds_(std::max(levels, 1)),
+      scales_(thresholds_.size()),
+      inverse_gaps_(thresholds_.size(), 0.0),
+      layers_(thresholds_.size()) {
+  for (std::size_t level = 0; level < thresholds_.size(); ++level) {
+    thresholds_[level] = t0 / static_cast<double>(1 << level);
+    scales_[level] = 1.0 / static_cast<double>(1 << level);
+  }
+  for (std::size_t level = 0; level + 1 < thresholds_.size(); ++level) {
+    inverse_gaps_[level] = 1.0 / (thresholds_[level + 1] - thresholds_[level]);
+  }
+  camera.validate();
+  depth.validateAgainst(camera);
+  Layer& distances = layers_[0];
+  distances.width = camera.width;
+  distances.height = camera.height;
+  distances.cells.resize(static_cast<std::size_t>(camera.width) * camera.height);
+  // Eq. 6: distance = z |pixelRay(u, v)|, the ray's squared x and y per column and row, so the
+  // loop over pixels is branch-free and vectorises (one sqrt per pixel, no division).
+  std::vector<double> ray_x2(static_cast<std::size_t>(camera.width));
+  for (int u = 0; u < camera.width; ++u)
+    ray_x2[u] = camera.pixelRay(u, 0).x() * camera.pixelRay(u, 0).x();
+  const int stride = depth.row_stride > 0 ? depth.row_stride : depth.width;
+  const bool parallel = static_cast<long>(camera.width) * camera.height >= kParallelPixels;
+  float farthest = 0.0f;  // valid distances are > 0
+#pragma omp parallel if (parallel) reduction(max : farthest)
+  {
+    // The farthest distance (firstReadLevel) in the same pass, per column while the row is in
+    // cache (elementwise, so it vectorises), instead of a second pass over M.
+    std::vector<float> column_farthest(static_cast<std::size_t>(camera.width), 0.0f);
+#pragma omp for schedule(static)
+    for (int v = 0; v < camera.height; ++v) {
+      const double ray_y = camera.pixelRay(0, v).y();
+      const double ray_y2 = ray_y * ray_y;
+      const float* depth_row = depth.depth + static_cast<std::size_t>(v) * stride;
+      float* row = &distances.cells[static_cast<std::size_t>(v) * camera.width];
+      for (int u = 0; u < camera.width; ++u) {
+        const float z = depth_row[u];
+        const double measured = z * std::sqrt(ray_x2[u] + ray_y2 + 1.0);
+        // Invalid: z <= 0, NaN, infinite, or beyond max_range (NaN compares false).
+        row[u] = z > 0.0f && measured <= max_range ? static_cast<float>(measured) : kNaN;
+      }
+      for (int u = 0; u < camera.width; ++u) {
+        column_farthest[u] = row[u] > column_farthest[u] ? row[u] : column_farthest[u];
+      }
+    }
+    for (float value : column_farthest) farthest = std::max(farthest, value);
+  }
+  farthest_ = farthest;
+  for (int level = 1; level < this->levels(); ++level) sizeLayer(level);
+  if (selection == PyramidSelection::kMinimum) {
+    buildMinimumLayers();
+  } else {
+    buildClosestLayers(firstReadLevel(reach_of_farthest));
+  }
+}
+
+int DistancePyramid::levelCount(const CameraIntrinsics& camera, double t0, double min_range,
+                                int max_levels) {
+  const int longest_side = std::max(camera.width, camera.height);
+  int levels = 1;
+  while (levels < max_levels && (1 << (levels - 1)) < longest_side &&
+         t0 / static_cast<double>(1 << (levels - 1)) > min_range) {
+    ++levels;
+  }
+  return levels;
+}
+
+void DistancePyramid::sizeLayer(int level) {
+  const Layer& full = layers_[0];
+  Layer& layer = layers_[level];
+  const int side = 1 << level;
+  layer.width = (full.width + side - 1) / side;
+  layer.height = (full.height + side - 1) / side;
+  layer.cells.assign(static_cast<std::size_t>(layer.width) * layer.height, kNaN);
+}
+
+void DistancePyramid::buildMinimumLayers() {
+  // The minimum of a block is the minimum of its 2 x 2 sub-blocks' minima (equal values are
+  // the same value, so which pixel a scan would keep does not matter).
+  for (int level = 1; level < levels(); ++level) {
+    const Layer& finer = layers_[level - 1];
+    Layer& layer = layers_[level];
+    const bool parallel = 4L * layer.width * layer.height >= kParallelPixels;
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int v = 0; v < layer.height; ++v) {
+      for (int u = 0; u < layer.width; ++u) {
+        float best = kInfinity;
+        for (int child_v = 2 * v; child_v < std::min(finer.height, 2 * v + 2); ++child_v) {
+          for (int child_u = 2 * u; child_u < std::min(finer.width, 2 * u + 2); ++child_u) {
+            const float value =
+                finer.cells[static_cast<std::size_t>(child_v) * finer.width + child_u];
+            if (value < best) best = value;  // NaN never compares smaller
+          }
+        }
+        if (best < kInfinity) layer.cells[static_cast<std::size_t>(v) * layer.width + u] = best;
+      }
+    }
+  }
+}
+
+int DistancePyramid::firstReadLevel(const std::function<double(double)>& reach_of_farthest) const {
+  if (!reach_of_farthest) return 0;
+  if (farthest_ == 0.0f) return levels();  // no valid pixel: no layer is read
+  // A voxel is read at its bracketing level i (t_{i+1} < distance <= t_i) and i + 1; no voxel
+  // farther than the reach is informed, so the nearest informed voxels decide (Eq. 12).
+  const double reach = reach_of_farthest(farthest_);
+  int level = 0;
+  while (level + 1 < levels() && reach <= threshold(level + 1)) ++level;
+  return level;
+}
+
+void DistancePyramid::buildClosestLayers(int first_read_level) {
+  // The fine layers have few pixels per cell: scanning M is cheaper than bucket bookkeeping.
+  // Those finer than any voxel reads stay invalid (at coarse resolutions the 2 x 2 and 4 x 4
+  // layers are read only by voxels tens of metres away).
+  const int scanned = std::min(kScannedLevels, levels());
+  const int first_scanned = std::max(1, first_read_level);
+#pragma omp parallel for schedule(dynamic, 1) if (first_scanned + 1 < scanned)
+  for (int level = first_scanned; level < scanned; ++level) {
+    const float target = static_cast<float>(threshold(level));
+    fillLayer(
+        layers_[0], level, [target](float value) { return std::abs(value - target); },
+        &layers_[level]);
+  }
+  if (levels() <= kScannedLevels) return;
+  std::vector<float> targets(static_cast<std::size_t>(levels()));
+  for (int level = 0; level < levels(); ++level) {
+    targets[level] = static_cast<float>(threshold(level));
+  }
+  DistanceBuckets coarse(targets), finer(targets);
+  fillBuckets(kScannedLevels, &coarse);
+  takeClosest(coarse, kScannedLevels);
+  for (int level = kScannedLevels + 1; level < levels(); ++level) {
+    std::swap(coarse, finer);
+    coarse.resize(layers_[level].width, layers_[level].height);
+    const bool parallel = cellBucketCount(coarse, levels()) >= kParallelPixels;
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int v = 0; v < coarse.height(); ++v) {
+      for (int u = 0; u < coarse.width(); ++u) {
+        for (int child_v = 2 * v; child_v < std::min(finer.height(), 2 * v + 2); ++child_v) {
+          for (int child_u = 2 * u; child_u < std::min(finer.width(), 2 * u + 2); ++child_u) {
+            finer.mergeCell(finer.cell(child_u, child_v), coarse.cell(u, v));
+          }
+        }
+      }
+    }
+    takeClosest(coarse, level);
+  }
+}
+
+void DistancePyramid::fillBuckets(int level, DistanceBuckets* buckets) const {
+  const Layer& full = layers_[0];
+  buckets->resize(layers_[level].width, layers_[level].height);
+  const int side = 1 << level;
+#pragma omp parallel for schedule(static)
+  for (int cell_v = 0; cell_v < buckets->height(); ++cell_v) {
+    const int v_begin = cell_v * side;
+    const int v_end = std::min(full.height, v_begin + side);
+    for (int cell_u = 0; cell_u < buckets->width(); ++cell_u) {
+      const int u_begin = cell_u * side;
+      const int u_end = std::min(full.width, u_begin + side);
+      // Most cells lie within one bucket: then its extremes are the cell's, found with
+      // branch-free min / max passes (NaN never compares, so invalid pixels drop out).
+      float low = kInfinity, high = -kInfinity;
+      for (int v = v_begin; v < v_end; ++v) {
+        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+        for (int u = u_begin; u < u_end; ++u) {
+          low = row[u] < low ? row[u] : low;
+          high = row[u] > high ? row[u] : high;
+        }
+      }
+      if (high == -kInfinity) continue;  // no valid pixel
+      BucketExtremes* cell = buckets->cell(cell_u, cell_v);
+      const int bucket = buckets->bucketOf(low);
+      if (bucket == buckets->bucketOf(high)) {
+        float low_next = kInfinity, high_next = -kInfinity;
+        for (int v = v_begin; v < v_end; ++v) {
+          const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+          for (int u = u_begin; u < u_end; ++u) {
+            low_next = row[u] > low && row[u] < low_next ? row[u] : low_next;
+            high_next = row[u] < high && row[u] > high_next ? row[u] : high_next;
+          }
+        }
+        cell[bucket] = {high, high_next, low, low_next};
+        continue;
+      }
+      for (int v = v_begin; v < v_end; ++v) {
+        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+        for (int u = u_begin; u < u_end; ++u) {
+          if (!std::isnan(row[u])) cell[buckets->bucketOf(row[u])].add(row[u]);
+        }
+      }
+    }
+  }
+}
+
+void DistancePyramid::takeClosest(const DistanceBuckets& buckets, int level) {
+  Layer& layer = layers_[level];
+  const float target = static_cast<float>(threshold(level));
+  const bool parallel = cellBucketCount(buckets, levels()) >= kParallelPixels;
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
+  for (int v = 0; v < layer.height; ++v) {
+    for (int u = 0; u < layer.width; ++u) {
+      float& kept = layer.cells[static_cast<std::size_t>(v) * layer.width + u];
+      if (!buckets.closest(buckets.cell(u, v), level, &kept)) {
+        kept = scanCell(level, u, v, target);  // a tie: the scan order decides
+      }
+    }
+  }
+}
+
+float DistancePyramid::scanCell(int level, int cell_u, int cell_v, float target) const {
+  const Layer& full = layers_[0];
+  const int side = 1 << level;
+  float best_score = kInfinity;
+  float kept = kNaN;
+  for (int v = cell_v * side; v < std::min(full.height, (cell_v + 1) * side); ++v) {
+    for (int u = cell_u * side; u < std::min(full.width, (cell_u + 1) * side); ++u) {
+      const float value = full.cells[static_cast<std::size_t>(v) * full.width + u];
+      const float candidate = std::abs(value - target);
+      if (candidate < best_score) {
+        best_score = candidate;
+        kept = value;
+      }
+    }
+  }
+  return kept;
+}
+
+template <class Score>
+void DistancePyramid::fillLayer(const Layer& full, int level, Score score, Layer* layer) {
+  // Row by row through M, keeping each cell's best so far: the same candidates in the same
+  // order (rows of a cell top to bottom, each left to right) as a cell-by-cell scan, so ties go
+  // to the same measurement. NaN scores never compare smaller, so invalid pixels drop out.
+  // Within a row the best of the cell's run of pixels is kept in registers and merged once
+  // (strictly smaller wins, so the earlier row keeps ties): no store-to-load chain per pixel.
+  const int side = 1 << level;
+  std::vector<float> best_score(static_cast<std::size_t>(layer->width));
+  for (int cell_v = 0; cell_v < layer->height; ++cell_v) {
+    float* best = &layer->cells[static_cast<std::size_t>(cell_v) * layer->width];
+    std::fill(best_score.begin(), best_score.end(), std::numeric_limits<float>::infinity());
+    const int v_end = std::min(full.height, (cell_v + 1) * side);
+    for (int v = cell_v * side; v < v_end; ++v) {
+      const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
+      for (int cell_u = 0; cell_u < layer->width; ++cell_u) {
+        const int u_end = std::min(full.width, (cell_u + 1) * side);
+        float run_score = best_score[cell_u];
+        float run_value = best[cell_u];
+        for (int u = cell_u * side; u < u_end; ++u) {
+          const float candidate = score(row[u]);
+          if (candidate < run_score) {
+            run_score = candidate;
+            run_value = row[u];
+          }
+        }
+        best_score[cell_u] = run_score;
+        best[cell_u] = run_value;
+      }
+    }
+  }
+}
+
+}  // namespace occupancy_fusion
