@@ -6,7 +6,6 @@
 // afterwards. What is skipped inside a frame (bad pixels, beams, points) is checked exactly, map
 // against map, by the unit tests test/unit/ros/test_bad_input.cpp.
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -35,52 +34,6 @@ namespace {
 constexpr int kWidth = 64, kHeight = 48;
 constexpr double kFocal = 50.0, kBaseline = 0.1, kWall = 2.0;  // px, m, m
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-// The latest status of every diagnostics task, with the wall time it came.
-class Diagnostics {
- public:
-  void onArray(const diagnostic_msgs::DiagnosticArray& array) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& status : array.status) latest_[status.name] = {status, ros::WallTime::now()};
-  }
-  // The status of `task` received after `after`; waits up to 5 s. Fails the test without one.
-  diagnostic_msgs::DiagnosticStatus after(const std::string& task, ros::WallTime after) {
-    diagnostic_msgs::DiagnosticStatus found;
-    const bool fresh = waitUntil(
-        [&] {
-          const std::lock_guard<std::mutex> lock(mutex_);
-          for (const auto& [name, entry] : latest_) {
-            if (isTask(entry.first, task) && entry.second > after) {
-              found = entry.first;
-              return true;
-            }
-          }
-          return false;
-        },
-        5.0);
-    EXPECT_TRUE(fresh) << "no diagnostics from '" << task << "'";
-    return found;
-  }
-  // Waits (up to `timeout_seconds`) until `key` of `task` reads `value`; its last value.
-  std::size_t waitForCount(const std::string& task, const std::string& key, std::size_t value,
-                           double timeout_seconds = 5.0) {
-    std::size_t count = 0;
-    waitUntil(
-        [&] {
-          const std::lock_guard<std::mutex> lock(mutex_);
-          for (const auto& [name, entry] : latest_) {
-            if (isTask(entry.first, task)) count = diagnosticCount(entry.first, key);
-          }
-          return count == value;
-        },
-        timeout_seconds);
-    return count;
-  }
-
- private:
-  std::mutex mutex_;
-  std::map<std::string, std::pair<diagnostic_msgs::DiagnosticStatus, ros::WallTime>> latest_;
-};
 
 geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
                                           const ros::Time& stamp, double x = 0.0) {
@@ -116,18 +69,9 @@ sensor_msgs::CameraInfo cameraInfo(const std::string& frame, const ros::Time& st
   return info;
 }
 
-sensor_msgs::Image floatImage(const std::string& frame, const ros::Time& stamp, float value) {
-  sensor_msgs::Image image;
-  image.header.frame_id = frame;
-  image.header.stamp = stamp;
-  image.width = kWidth;
-  image.height = kHeight;
-  image.encoding = "32FC1";
-  image.step = kWidth * sizeof(float);
-  const std::vector<float> values(kWidth * kHeight, value);
-  image.data.resize(values.size() * sizeof(float));
-  std::memcpy(image.data.data(), values.data(), image.data.size());
-  return image;
+// A kWidth x kHeight 32FC1 image of one value.
+sensor_msgs::Image uniformImage(const std::string& frame, const ros::Time& stamp, float value) {
+  return floatImage(std::vector<float>(kWidth * kHeight, value), kWidth, kHeight, frame, stamp);
 }
 
 class BadInputMatrix : public ::testing::Test {
@@ -140,9 +84,7 @@ class BadInputMatrix : public ::testing::Test {
 
   static void SetUpTestSuite() {
     ros::NodeHandle nh;
-    diagnostics_ = new Diagnostics;
-    diagnostics_subscriber_ =
-        new ros::Subscriber(nh.subscribe("/diagnostics", 50, &Diagnostics::onArray, diagnostics_));
+    observer_ = new MapObserver(nh);
     depth_ = nh.advertise<sensor_msgs::Image>("/camera/depth/image", 10);
     depth_info_ = nh.advertise<sensor_msgs::CameraInfo>("/camera/depth/camera_info", 10);
     disparity_ = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 10);
@@ -195,7 +137,7 @@ class BadInputMatrix : public ::testing::Test {
     stereo_msgs::DisparityImage message;
     message.header.frame_id = "stereo_optical";
     message.header.stamp = stamp;
-    message.image = floatImage("stereo_optical", stamp, kFocal * kBaseline / kWall);
+    message.image = uniformImage("stereo_optical", stamp, kFocal * kBaseline / kWall);
     message.f = kFocal;
     message.T = baseline;
     message.min_disparity = 0.0f;
@@ -235,8 +177,8 @@ class BadInputMatrix : public ::testing::Test {
   // it) and the laser layer's known cells (a MapServer key), read from statuses sent after now.
   static std::pair<std::size_t, std::size_t> mapState() {
     const ros::WallTime now = ros::WallTime::now();
-    return {diagnosticCount(diagnostics_->after(kDisparity, now), "map version"),
-            diagnosticCount(diagnostics_->after(kMapServer, now), "layer cells")};
+    return {countIn(observer_->diagnosticsAfter(kDisparity, now), "map version"),
+            countIn(observer_->diagnosticsAfter(kMapServer, now), "layer cells")};
   }
 
   static std::string dropped(const std::string& reason) {
@@ -245,11 +187,10 @@ class BadInputMatrix : public ::testing::Test {
 
   // Expects `key` of `task` to reach `value`.
   static void expectCount(const std::string& task, const std::string& key, std::size_t value) {
-    EXPECT_EQ(diagnostics_->waitForCount(task, key, value), value) << task << ": " << key;
+    EXPECT_EQ(observer_->waitForCount(task, key, value), value) << task << ": " << key;
   }
 
-  static Diagnostics* diagnostics_;
-  static ros::Subscriber* diagnostics_subscriber_;
+  static MapObserver* observer_;
   static ros::Publisher depth_, depth_info_, disparity_, disparity_info_, scan_, cloud_;
   static tf2_ros::TransformBroadcaster* tf_;
   static tf2_ros::StaticTransformBroadcaster* static_tf_;
@@ -257,8 +198,7 @@ class BadInputMatrix : public ::testing::Test {
   static std::map<std::string, std::size_t> camera_infos_sent_;  // by task
 };
 
-Diagnostics* BadInputMatrix::diagnostics_ = nullptr;
-ros::Subscriber* BadInputMatrix::diagnostics_subscriber_ = nullptr;
+MapObserver* BadInputMatrix::observer_ = nullptr;
 ros::Publisher BadInputMatrix::depth_, BadInputMatrix::depth_info_, BadInputMatrix::disparity_,
     BadInputMatrix::disparity_info_, BadInputMatrix::scan_, BadInputMatrix::cloud_;
 tf2_ros::TransformBroadcaster* BadInputMatrix::tf_ = nullptr;
@@ -270,7 +210,7 @@ std::map<std::string, std::size_t> BadInputMatrix::camera_infos_sent_;
 TEST_F(BadInputMatrix, CameraInfoMissing) {
   const auto before = mapState();
   ros::Time stamp = nextStamp();
-  send(depth_, floatImage("depth_optical", stamp, kWall));
+  send(depth_, uniformImage("depth_optical", stamp, kWall));
   send(disparity_, disparity(stamp, kBaseline));
   expectCount(kDepth, dropped("no camera_info"), 1);
   expectCount(kDisparity, dropped("no camera_info"), 1);
@@ -279,7 +219,7 @@ TEST_F(BadInputMatrix, CameraInfoMissing) {
   sendCameraInfo(disparity_info_, kDisparity, cameraInfo("stereo_optical", stamp));
   stamp = nextStamp();
   sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp));
-  send(depth_, floatImage("depth_optical", stamp, kWall));
+  send(depth_, uniformImage("depth_optical", stamp, kWall));
   send(disparity_, disparity(stamp, kBaseline));
   expectCount(kDepth, "frames integrated", 1);
   expectCount(kDisparity, "frames integrated", 1);
@@ -290,31 +230,31 @@ TEST_F(BadInputMatrix, DepthImages) {
   const auto before = mapState();
   // Unsupported encoding.
   ros::Time stamp = nextStamp();
-  sensor_msgs::Image rgb = floatImage("depth_optical", stamp, kWall);
+  sensor_msgs::Image rgb = uniformImage("depth_optical", stamp, kWall);
   rgb.encoding = "rgb8";
   send(depth_, rgb);
   // camera_info of another size, stamped like its image.
   stamp = nextStamp();
   sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp, 32, 24));
-  send(depth_, floatImage("depth_optical", stamp, kWall));
+  send(depth_, uniformImage("depth_optical", stamp, kWall));
   // camera_info with zero focal length.
   stamp = nextStamp();
   sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp, kWidth, kHeight, 0.0));
-  send(depth_, floatImage("depth_optical", stamp, kWall));
+  send(depth_, uniformImage("depth_optical", stamp, kWall));
   expectCount(kDepth, dropped("encoding"), 1);
   expectCount(kDepth, dropped("camera_info"), 2);
   EXPECT_EQ(mapState(), before);
-  EXPECT_EQ(diagnosticCount(diagnostics_->after(kDepth, ros::WallTime::now()), "frames integrated"),
+  EXPECT_EQ(countIn(observer_->diagnosticsAfter(kDepth, ros::WallTime::now()), "frames integrated"),
             1u);
 
   // A good frame, then the same stamp again: the duplicate is dropped.
   stamp = nextStamp(0.5);
   sendCameraInfo(depth_info_, kDepth, cameraInfo("depth_optical", stamp));
-  send(depth_, floatImage("depth_optical", stamp, kWall));
+  send(depth_, uniformImage("depth_optical", stamp, kWall));
   expectCount(kDepth, "frames integrated", 2);
   const auto after_good = mapState();
   EXPECT_NE(after_good.first, before.first);
-  send(depth_, floatImage("depth_optical", stamp, kWall));
+  send(depth_, uniformImage("depth_optical", stamp, kWall));
   expectCount(kDepth, dropped("duplicate stamp"), 1);
   EXPECT_EQ(mapState(), after_good);
 }
@@ -397,7 +337,7 @@ TEST_F(BadInputMatrix, PointCloudsAndTf) {
 TEST_F(BadInputMatrix, TimeJumpsBack) {
   expectCount(kLaser, "time jumps back (tf buffer cleared)", 0);
   const std::size_t integrated =
-      diagnosticCount(diagnostics_->after(kLaser, ros::WallTime::now()), "frames integrated");
+      countIn(observer_->diagnosticsAfter(kLaser, ros::WallTime::now()), "frames integrated");
   const ros::Time replayed = last_stamp_ - ros::Duration(30.0);
   send(scan_, scan(replayed));
   expectCount(kLaser, "time jumps back (tf buffer cleared)", 1);
@@ -406,7 +346,7 @@ TEST_F(BadInputMatrix, TimeJumpsBack) {
   for (int attempt = 0; attempt < 10; ++attempt) {
     tf_->sendTransform(transform("map", "base_link", replayed - ros::Duration(0.05), 3.0));
     tf_->sendTransform(transform("map", "base_link", replayed + ros::Duration(0.05), 3.0));
-    if (diagnostics_->waitForCount(kLaser, "frames integrated", integrated + 1, 0.5) ==
+    if (observer_->waitForCount(kLaser, "frames integrated", integrated + 1, 0.5) ==
         integrated + 1) {
       break;
     }

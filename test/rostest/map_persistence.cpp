@@ -50,39 +50,6 @@ std::string readBytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// The last message of a MapServer output, from a subscription made when asked. The topics are
-// latched, and roscpp hands a new subscription the latched message of a publisher that is
-// already gone (an unloaded MapServer) when its link is not torn down yet: messages stamped before
-// `not_before` are such leftovers and ignored.
-template <class Message>
-class OutputWatcher {
- public:
-  explicit OutputWatcher(std::string topic) : topic_(std::move(topic)) {}
-  void subscribe(const ros::Time& not_before = ros::Time()) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    last_.reset();
-    not_before_ = not_before;
-    subscriber_ = ros::NodeHandle().subscribe(topic_, 1, &OutputWatcher::onMessage, this);
-  }
-  void unsubscribe() { subscriber_.shutdown(); }
-  typename Message::ConstPtr last() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return last_;
-  }
-
- private:
-  void onMessage(const typename Message::ConstPtr& message) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (message->header.stamp < not_before_) return;
-    last_ = message;
-  }
-  const std::string topic_;
-  mutable std::mutex mutex_;
-  ros::Subscriber subscriber_;
-  ros::Time not_before_;
-  typename Message::ConstPtr last_;
-};
-
 bool loadNodelet(const std::string& name, const std::string& type,
                  const std::vector<std::pair<std::string, std::string>>& remappings = {}) {
   nodelet::NodeletLoad load;
@@ -140,17 +107,21 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   const TemporaryFolder temporary;
   const fs::path& folder = temporary.path();
   const std::string a = (folder / "a").string();
-  OutputWatcher<sensor_msgs::PointCloud2> watcher("/octomap_point_cloud_centers");
-  OutputWatcher<nav_msgs::OccupancyGrid> grid_watcher("/projected_map");
+  constexpr const char* kCentres = "/octomap_point_cloud_centers";
+  constexpr const char* kProjected = "/projected_map";
+  ros::NodeHandle node_handle;
+  MapObserver observer(node_handle);
+  auto centres = [&] { return observer.latest<sensor_msgs::PointCloud2>(kCentres); };
+  auto projected = [&] { return observer.latest<nav_msgs::OccupancyGrid>(kProjected); };
 
   ASSERT_TRUE(ros::service::waitForService("/manager/load_nodelet", ros::Duration(20.0)));
   // 1. MapServer A on the map the PointCloudMapper fills.
   setMapServerParameters("/map_server_a", "", a, (folder / "unused").string());
   ASSERT_TRUE(loadNodelet("/map_server_a", "occupancy_fusion/MapServer"));
-  watcher.subscribe();
+  observer.watch<sensor_msgs::PointCloud2>(kCentres);
   ASSERT_TRUE(waitUntil(
       [&] {
-        const auto cloud = watcher.last();
+        const auto cloud = centres();
         return cloud && cloud->width * cloud->height >= 2000;
       },
       40.0))
@@ -200,10 +171,14 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   ASSERT_TRUE(unloadNodelet("/simulator"));
   const std::string b = (folder / "b").string();
   setMapServerParameters("/map_server_b", a + ".ot", "", b);
-  watcher.subscribe(ros::Time::now());
-  grid_watcher.subscribe(ros::Time::now());
+  // The outputs are latched: messages stamped before now are A's, handed over while its links
+  // are not torn down yet.
+  const ros::Time b_start = ros::Time::now();
+  observer.unwatch(kCentres);
+  observer.watch<sensor_msgs::PointCloud2>(kCentres, 1, {}, b_start);
+  observer.watch<nav_msgs::OccupancyGrid>(kProjected, 1, {}, b_start);
   ASSERT_TRUE(loadNodelet("/map_server_b", "occupancy_fusion/MapServer"));
-  ASSERT_TRUE(waitUntil([&] { return watcher.last() && grid_watcher.last(); }, 10.0));
+  ASSERT_TRUE(waitUntil([&] { return centres() && projected(); }, 10.0));
   // The fused view of what was saved, computed here from the two files, is what B publishes;
   // without the laser layer it would not be (the layer's cells differ from the voxels' columns).
   {
@@ -216,7 +191,7 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
     layer.importRaster(saved_layer);
     const OccupancyRaster expected = projectToRaster(*voxels, &layer, FusedGridConfig());
     const OccupancyRaster voxels_only = projectToRaster(*voxels, nullptr, FusedGridConfig());
-    const nav_msgs::OccupancyGrid& published = *grid_watcher.last();
+    const nav_msgs::OccupancyGrid& published = *projected();
     ASSERT_EQ(static_cast<int>(published.info.width), expected.width);
     ASSERT_EQ(static_cast<int>(published.info.height), expected.height);
     EXPECT_NEAR(published.info.origin.position.x, expected.origin_x, 1e-6);
@@ -225,7 +200,7 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
     EXPECT_TRUE(voxels_only.width != expected.width || voxels_only.data != expected.data);
   }
   // Right after start, the published cloud is exactly the file's occupied voxels.
-  const std::vector<Eigen::Vector3d> points = cloudPoints(*watcher.last());
+  const std::vector<Eigen::Vector3d> points = cloudPoints(*centres());
   EXPECT_EQ(static_cast<double>(points.size()), saved_occupied);
   std::size_t not_occupied_in_file = 0;
   for (const Eigen::Vector3d& p : points) {
@@ -261,7 +236,7 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
                           {{"/cloud_in", "/camera/depth/points"}}));
   ASSERT_TRUE(waitUntil(
       [&] {
-        const auto cloud = watcher.last();
+        const auto cloud = centres();
         return cloud && cloud->width * cloud->height >= loaded_points + 200;
       },
       40.0))
@@ -286,8 +261,6 @@ TEST(MapPersistence, SaveOnShutdownRestartWithLoadMapAndResume) {
   ASSERT_GT(loaded, 1000u);
   EXPECT_GE(static_cast<double>(kept_occupied) / loaded, 0.9);
   EXPECT_GE(changed, loaded / 10);
-  watcher.unsubscribe();
-  grid_watcher.unsubscribe();
 }
 
 }  // namespace

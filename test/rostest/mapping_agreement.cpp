@@ -11,7 +11,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <limits>
 #include <map>
 #include <memory>
@@ -106,20 +105,6 @@ sensor_msgs::CameraInfo cameraInfo(const std::string& frame, const ros::Time& st
   info.P = {f_p, 0.0, (width - 1) / 2.0, 0.0, 0.0, f_p, (height - 1) / 2.0, 0.0, 0.0, 0.0,
             1.0, 0.0};
   return info;
-}
-
-sensor_msgs::Image floatImage(const std::vector<float>& values, int width, int height,
-                              const std::string& frame, const ros::Time& stamp) {
-  sensor_msgs::Image image;
-  image.header.frame_id = frame;
-  image.header.stamp = stamp;
-  image.width = width;
-  image.height = height;
-  image.encoding = "32FC1";
-  image.step = width * sizeof(float);
-  image.data.resize(values.size() * sizeof(float));
-  std::memcpy(image.data.data(), values.data(), image.data.size());
-  return image;
 }
 
 // A wall 2.4 m ahead with a box 1.5 m ahead; the duplicate's pixels are all 1 m.

@@ -23,6 +23,7 @@
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <std_srvs/SetBool.h>
@@ -177,6 +178,7 @@ class MapObserver {
     subscribers_.push_back(node_handle_.subscribe<diagnostic_msgs::DiagnosticArray>(
         "/diagnostics", 50,
         [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) { onArray(*array); }));
+    topics_.emplace_back();  // the diagnostics' subscriber is no watch()
   }
   // The spinner's threads may be inside a callback while the test suite tears down: shut the
   // subscriptions down first (shutdown() waits for a running callback).
@@ -186,11 +188,19 @@ class MapObserver {
   MapObserver(const MapObserver&) = delete;
   MapObserver& operator=(const MapObserver&) = delete;
 
+  // not_before: messages stamped earlier are ignored. A latched topic's new subscription can be
+  // handed the latched message of a publisher that is already gone (an unloaded nodelet) while
+  // its link is not torn down yet.
   template <class Message>
   void watch(const std::string& topic, std::uint32_t queue_size = 1,
-             std::function<void(const typename Message::ConstPtr&)> also = {}) {
-    subscribers_.push_back(node_handle_.subscribe<Message>(
-        topic, queue_size, [this, topic, also](const typename Message::ConstPtr& message) {
+             std::function<void(const typename Message::ConstPtr&)> also = {},
+             const ros::Time& not_before = ros::Time()) {
+    const ros::Subscriber subscriber = node_handle_.subscribe<Message>(
+        topic, queue_size,
+        [this, topic, also, not_before](const typename Message::ConstPtr& message) {
+          if constexpr (ros::message_traits::HasHeader<Message>::value) {
+            if (message->header.stamp < not_before) return;
+          }
           {
             std::lock_guard<std::mutex> lock(mutex_);
             Latest& latest = latest_[topic];
@@ -200,7 +210,30 @@ class MapObserver {
             latest.arrival = ros::WallTime::now();
           }
           if (also) also(message);
-        }));
+        });
+    std::lock_guard<std::mutex> lock(mutex_);
+    subscribers_.push_back(subscriber);
+    topics_.emplace_back(topic);
+  }
+  // Stops watching `topic` and forgets what came on it: a later watch() starts afresh.
+  void unwatch(const std::string& topic) {
+    std::vector<ros::Subscriber> stopped;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (std::size_t i = 0; i < topics_.size();) {
+        if (topics_[i] == topic) {
+          stopped.push_back(subscribers_[i]);
+          subscribers_.erase(subscribers_.begin() + i);
+          topics_.erase(topics_.begin() + i);
+        } else {
+          ++i;
+        }
+      }
+    }
+    // Outside the lock: shutdown() waits for a running callback, which takes it.
+    for (ros::Subscriber& subscriber : stopped) subscriber.shutdown();
+    std::lock_guard<std::mutex> lock(mutex_);
+    latest_.erase(topic);
   }
   // The latest message on a watched topic; null before the first.
   template <class Message>
@@ -247,6 +280,20 @@ class MapObserver {
   std::size_t diagnosticCount(const std::string& task, const std::string& key) const {
     return countIn(diagnostics(task), key);
   }
+  // The task's first values that came after `after` (wall time); waits up to `timeout_seconds`
+  // and fails the test without them.
+  DiagnosticValues diagnosticsAfter(const std::string& task, const ros::WallTime& after,
+                                    double timeout_seconds = 5.0) const {
+    const bool fresh = waitUntil([&] { return diagnosticsArrival(task) > after; }, timeout_seconds);
+    EXPECT_TRUE(fresh) << "no diagnostics from '" << task << "'";
+    return diagnostics(task);
+  }
+  // Waits (up to `timeout_seconds`) until `key` of `task` reads `value`; its last value.
+  std::size_t waitForCount(const std::string& task, const std::string& key, std::size_t value,
+                           double timeout_seconds = 5.0) const {
+    waitUntil([&] { return diagnosticCount(task, key) == value; }, timeout_seconds);
+    return diagnosticCount(task, key);
+  }
   void onDiagnostics(std::function<void(const diagnostic_msgs::DiagnosticStatus&)> hook) {
     std::lock_guard<std::mutex> lock(mutex_);
     diagnostics_hooks_.push_back(std::move(hook));
@@ -283,12 +330,28 @@ class MapObserver {
 
   ros::NodeHandle node_handle_;
   mutable std::mutex mutex_;
-  std::vector<ros::Subscriber> subscribers_;
+  std::vector<ros::Subscriber> subscribers_;  // the diagnostics', then one per watch()
+  std::vector<std::string> topics_;           // per subscriber; "" for the diagnostics
   std::map<std::string, Latest> latest_;
   std::map<std::string, DiagnosticValues> diagnostics_;
   std::map<std::string, ros::WallTime> diagnostics_arrivals_;
   std::vector<std::function<void(const diagnostic_msgs::DiagnosticStatus&)>> diagnostics_hooks_;
 };
+
+// A 32FC1 image of `values` (row-major, width x height).
+inline sensor_msgs::Image floatImage(const std::vector<float>& values, int width, int height,
+                                     const std::string& frame, const ros::Time& stamp) {
+  sensor_msgs::Image image;
+  image.header.frame_id = frame;
+  image.header.stamp = stamp;
+  image.width = width;
+  image.height = height;
+  image.encoding = "32FC1";
+  image.step = width * sizeof(float);
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(values.data());
+  image.data.assign(bytes, bytes + values.size() * sizeof(float));
+  return image;
+}
 
 // Runs a shell command; its output (stdout and stderr) and, in exit_code, pclose's status.
 inline std::string runCommand(const std::string& command, int* exit_code) {
