@@ -83,6 +83,11 @@ class LaserMapper : public MapperNodeletBase {
       config_ = readLaserMapperConfig(parameters);
       MappingSessionConfig session;
       session.laser_sources = config_.sources;
+      // The frames' source is the topic as subscribed (resolved in the nodelet's namespace), as
+      // every mapper names it; the session finds a scan's source by it.
+      for (LaserSourceConfig& source : session.laser_sources) {
+        source.topic = getNodeHandle().resolveName(source.topic);
+      }
       startSession(session);
     });
     // Before the first scan can arrive. Every scanner has its own integrator (its source's
@@ -122,7 +127,7 @@ class LaserMapper : public MapperNodeletBase {
   bool onScan(const ScanMessage& message, Source* source) {
     const auto start = std::chrono::steady_clock::now();
     LaserScanFrame frame;
-    frame.header = frameHeaderOf(message.header, "laser", source->config.topic);
+    frame.header = frameHeaderOf(message.header, "laser", source->subscriber.getTopic());
     const std::string sensor_frame = session().sensorFrameOf(frame.header);
     Eigen::Isometry3d vehicle_T_sensor;
     try {

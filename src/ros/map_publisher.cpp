@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -10,6 +11,7 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "occupancy_fusion/IntegratedStamps.h"
 #include "occupancy_fusion/Octomap.h"
 #include "occupancy_fusion/map/octomap_conversion.h"
 #include "occupancy_fusion/mapping/map_saving.h"
@@ -134,6 +136,7 @@ MapPublisher::MapPublisher(const ros::NodeHandle& node_handle,
   ros::NodeHandle topics(node_handle);
   // Latched: a late subscriber gets the last map at once instead of waiting for a change.
   grid_publisher_ = topics.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, true);
+  grid_stamps_publisher_ = topics.advertise<IntegratedStamps>("projected_map_stamps", 1, true);
   markers_publisher_ =
       topics.advertise<visualization_msgs::MarkerArray>("occupied_cells_vis_array", 1, true);
   cloud_publisher_ =
@@ -220,7 +223,9 @@ void MapPublisher::refreshCache() {
 
 void MapPublisher::publishGrid(const ros::Time& stamp) {
   const auto start = Clock::now();
-  const SentVersion version = currentVersion();  // read before: later writes are sent next time
+  // Both read before the map: later writes are sent next time, and every frame listed is in it.
+  const std::map<std::string, ros::Time> integrated = map_->integratedStamps();
+  const SentVersion version = currentVersion();
   OccupancyRaster raster;
   {
     const MapCallTimer timer(&lock_statistics_, "projected_map update");
@@ -228,6 +233,15 @@ void MapPublisher::publishGrid(const ros::Time& stamp) {
   }
   auto grid = boost::make_shared<nav_msgs::OccupancyGrid>();
   toOccupancyGridMessage(raster, map_->frameId(), stamp, grid.get());
+  if (grid_stamps_publisher_.getNumSubscribers() > 0) {
+    auto stamps = boost::make_shared<IntegratedStamps>();
+    stamps->header = grid->header;
+    for (const auto& [source, newest] : integrated) {
+      stamps->sources.push_back(source);
+      stamps->stamps.push_back(newest);
+    }
+    grid_stamps_publisher_.publish(stamps);
+  }
   grid_publisher_.publish(grid);
   grid_sent_ = version;
   timings_.grid_ms = millisecondsSince(start);

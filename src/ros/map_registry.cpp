@@ -33,8 +33,24 @@ SharedMap::SharedMap(const SharedMapConfig& config)
     : config_(config), voxels_(config.voxels), layer_(config.layer()) {}
 
 void SharedMap::reset() {
+  {
+    // Cleared first: a frame noted after this is written after the reset too.
+    const std::lock_guard<std::mutex> lock(stamps_mutex_);
+    integrated_stamps_.clear();
+  }
   voxels_.reset();
   layer_.reset();
+}
+
+void SharedMap::noteIntegrated(const std::string& source, const ros::Time& stamp) {
+  const std::lock_guard<std::mutex> lock(stamps_mutex_);
+  ros::Time& newest = integrated_stamps_[source];
+  if (stamp > newest) newest = stamp;
+}
+
+std::map<std::string, ros::Time> SharedMap::integratedStamps() const {
+  const std::lock_guard<std::mutex> lock(stamps_mutex_);
+  return integrated_stamps_;
 }
 
 MapRegistry& MapRegistry::instance() {

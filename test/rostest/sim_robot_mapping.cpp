@@ -1,9 +1,11 @@
 // Checks mapping.launch with all four mappers in one manager on the Simulator: the fused map
 // (the MapServer's occupied voxel centres and projected_map) against the room scene's ground
 // truth, each mapper's share of it, and each mapper's diagnostics (the keys every mapper reports
-// alike, see FrameStatistics) against the frames this node saw on the same topics.
+// alike, see FrameStatistics) against the frames this node saw on the same topics, and what the
+// MapServer says each projected_map holds (projected_map_stamps) against the frames sent.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -19,6 +21,7 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <stereo_msgs/DisparityImage.h>
 
+#include "occupancy_fusion/IntegratedStamps.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "rostest_support.h"
 
@@ -48,17 +51,79 @@ const std::vector<MapperUnderTest> kMappers = {
 // Every key of a mapper's latest diagnostics status, by task.
 using Values = DiagnosticValues;
 
-// Counts the frames sent on every input topic and keeps the fused map and the diagnostics.
+// The stamps of every frame the sensors sent, by resolved topic, and every projected_map_stamps
+// message (what each projected_map held).
+struct StampLog {
+  std::mutex mutex;
+  std::map<std::string, std::vector<ros::Time>> sent;
+  std::vector<IntegratedStamps::ConstPtr> published;
+
+  template <class Message>
+  std::function<void(const typename Message::ConstPtr&)> recorder(const std::string& topic) {
+    return [this, topic](const typename Message::ConstPtr& message) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      sent["/" + topic].push_back(message->header.stamp);
+    };
+  }
+};
+StampLog g_stamps;
+
 // The sensors' topics (the frames the simulator sent, as a second subscriber sees them) and the
 // map's outputs.
 void watchRobot(MapObserver* observer) {
-  observer->watch<sensor_msgs::Image>("camera/depth/image", 100);
-  observer->watch<stereo_msgs::DisparityImage>("stereo/disparity", 100);
-  observer->watch<sensor_msgs::LaserScan>("front_laser/scan", 100);
-  observer->watch<sensor_msgs::LaserScan>("rear_laser/scan", 100);
-  observer->watch<sensor_msgs::PointCloud2>("camera/depth/points", 100);
+  const auto watch_sensor = [&](auto message_type, const std::string& topic) {
+    using Message = decltype(message_type);
+    observer->watch<Message>(topic, 100, g_stamps.recorder<Message>(topic));
+  };
+  watch_sensor(sensor_msgs::Image(), "camera/depth/image");
+  watch_sensor(stereo_msgs::DisparityImage(), "stereo/disparity");
+  watch_sensor(sensor_msgs::LaserScan(), "front_laser/scan");
+  watch_sensor(sensor_msgs::LaserScan(), "rear_laser/scan");
+  watch_sensor(sensor_msgs::PointCloud2(), "camera/depth/points");
   observer->watch<sensor_msgs::PointCloud2>("octomap_point_cloud_centers");
   observer->watch<nav_msgs::OccupancyGrid>("projected_map");
+  observer->watch<IntegratedStamps>("projected_map_stamps", 100,
+                                    [](const IntegratedStamps::ConstPtr& message) {
+                                      const std::lock_guard<std::mutex> lock(g_stamps.mutex);
+                                      g_stamps.published.push_back(message);
+                                    });
+}
+
+// projected_map_stamps: each projected_map lists, per input topic, the newest frame integrated
+// before it was built. Every listed stamp is one a sensor sent (within the microsecond the
+// frames' double seconds keep), a topic's listed stamps never go back, and after the sensors
+// stopped and the mappers settled the last list holds every topic at (nearly) its last frame.
+void expectStampsOfWhatTheGridHolds(const nav_msgs::OccupancyGrid& last_grid) {
+  const std::lock_guard<std::mutex> lock(g_stamps.mutex);
+  ASSERT_FALSE(g_stamps.published.empty());
+  // Frames sent before this node's subscription connected were not seen here.
+  const auto matchesASentFrame = [](const std::vector<ros::Time>& sent, const ros::Time& stamp) {
+    return stamp + ros::Duration(1e-6) < *std::min_element(sent.begin(), sent.end()) ||
+           std::any_of(sent.begin(), sent.end(), [&](const ros::Time& frame) {
+             return std::abs((frame - stamp).toSec()) <= 1e-6;
+           });
+  };
+  std::map<std::string, ros::Time> previous;
+  for (const IntegratedStamps::ConstPtr& message : g_stamps.published) {
+    ASSERT_EQ(message->sources.size(), message->stamps.size());
+    for (std::size_t i = 0; i < message->sources.size(); ++i) {
+      const std::string& source = message->sources[i];
+      ASSERT_EQ(g_stamps.sent.count(source), 1u) << "not a sensor topic: " << source;
+      EXPECT_TRUE(matchesASentFrame(g_stamps.sent[source], message->stamps[i])) << source;
+      EXPECT_GE(message->stamps[i], previous[source]) << source << " went back";
+      previous[source] = message->stamps[i];
+    }
+  }
+  const IntegratedStamps& last = *g_stamps.published.back();
+  EXPECT_EQ(last.header.stamp, last_grid.header.stamp) << "the last list is not the last grid's";
+  EXPECT_EQ(last.sources.size(), g_stamps.sent.size()) << "a topic's frames are not listed";
+  for (std::size_t i = 0; i < last.sources.size(); ++i) {
+    std::vector<ros::Time> sent = g_stamps.sent[last.sources[i]];
+    std::sort(sent.begin(), sent.end());
+    // A frame may have been dropped (tf), so the newest integrated is one of the last few sent.
+    const ros::Time third_last = sent[sent.size() >= 3 ? sent.size() - 3 : 0];
+    EXPECT_GE(last.stamps[i] + ros::Duration(1e-6), third_last) << last.sources[i];
+  }
 }
 
 double number(const Values& values, const std::string& key) {
@@ -209,6 +274,7 @@ TEST_F(SimRobotMapping, FusedMapAndDiagnosticsOfAllFourMappers) {
   // every turn, and by the cameras only in part of it.
   EXPECT_EQ(cellAt(*projected, 3.91, 0.0), 100);
   EXPECT_EQ(cellAt(*projected, -3.91, 0.0), 100);
+  expectStampsOfWhatTheGridHolds(*projected);
 }
 
 }  // namespace

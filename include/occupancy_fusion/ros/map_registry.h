@@ -9,6 +9,8 @@
 #include <mutex>
 #include <string>
 
+#include <ros/time.h>
+
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/params/parameter_source.h"
@@ -29,8 +31,9 @@ struct SharedMapConfig {
 // map_name, frame_id, and everything readVoxelMapConfig reads.
 SharedMapConfig readSharedMapConfig(const ParameterSource& source);
 
-// The 3D voxel map and the 2D laser layer of one map. Both are thread-safe on their own (see
-// VoxelMap); this object adds nothing that needs a lock.
+// The 3D voxel map and the 2D laser layer of one map, and the newest stamp each input source
+// integrated into them. The maps are thread-safe on their own (see VoxelMap); the stamps have a
+// lock of their own.
 class SharedMap {
  public:
   explicit SharedMap(const SharedMapConfig& config);
@@ -45,10 +48,19 @@ class SharedMap {
 
   void reset();  // forgets everything: all voxels and cells unknown again
 
+  // A frame of `source` (its input topic) stamped `stamp` is in the map: called by a mapper after
+  // the write. The newest stamp per source is kept (a stamp older than it changes nothing).
+  void noteIntegrated(const std::string& source, const ros::Time& stamp);
+  // The newest stamp integrated per source, read before the map is read for an output: every
+  // frame it lists is in what is read next.
+  std::map<std::string, ros::Time> integratedStamps() const;
+
  private:
   SharedMapConfig config_;
   VoxelMap voxels_;
   GridLayer2D layer_;
+  mutable std::mutex stamps_mutex_;
+  std::map<std::string, ros::Time> integrated_stamps_;
 };
 
 class MapRegistry {

@@ -65,7 +65,11 @@ class MapperNodeletBase : public nodelet::Nodelet {
       const std::lock_guard<std::mutex> lock(session_mutex_);
       outcome = session_->integrate(frame);
     }
-    if (outcome.integrated) return true;
+    if (outcome.integrated) {
+      // The stamp as the frame carries it (s, a double: within a microsecond of the message's).
+      map_->noteIntegrated(frame.header.source, ros::Time(frame.header.stamp));
+      return true;
+    }
     frames_.countDropped(outcome.drop);
     NODELET_WARN_THROTTLE(5.0, "%s dropped: %s", what.c_str(), outcome.detail.c_str());
     return false;
