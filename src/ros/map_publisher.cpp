@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -224,7 +223,8 @@ void MapPublisher::refreshCache() {
 void MapPublisher::publishGrid(const ros::Time& stamp) {
   const auto start = Clock::now();
   // Both read before the map: later writes are sent next time, and every frame listed is in it.
-  const std::map<std::string, ros::Time> integrated = map_->integratedStamps();
+  const std::vector<SharedMap::IntegratedFrame> integrated =
+      map_->integratedSince(grid_frames_listed_);
   const SentVersion version = currentVersion();
   OccupancyRaster raster;
   {
@@ -233,12 +233,13 @@ void MapPublisher::publishGrid(const ros::Time& stamp) {
   }
   auto grid = boost::make_shared<nav_msgs::OccupancyGrid>();
   toOccupancyGridMessage(raster, map_->frameId(), stamp, grid.get());
+  if (!integrated.empty()) grid_frames_listed_ = integrated.back().number;
   if (grid_stamps_publisher_.getNumSubscribers() > 0) {
     auto stamps = boost::make_shared<IntegratedStamps>();
     stamps->header = grid->header;
-    for (const auto& [source, newest] : integrated) {
-      stamps->sources.push_back(source);
-      stamps->stamps.push_back(newest);
+    for (const SharedMap::IntegratedFrame& frame : integrated) {
+      stamps->sources.push_back(frame.source);
+      stamps->stamps.push_back(frame.stamp);
     }
     grid_stamps_publisher_.publish(stamps);
   }

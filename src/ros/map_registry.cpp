@@ -1,5 +1,6 @@
 #include "occupancy_fusion/ros/map_registry.h"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,23 +35,28 @@ SharedMap::SharedMap(const SharedMapConfig& config)
 
 void SharedMap::reset() {
   {
-    // Cleared first: a frame noted after this is written after the reset too.
-    const std::lock_guard<std::mutex> lock(stamps_mutex_);
-    integrated_stamps_.clear();
+    // Forgotten first: a frame noted after this is written after the reset too.
+    const std::lock_guard<std::mutex> lock(integrated_mutex_);
+    integrated_.clear();
   }
   voxels_.reset();
   layer_.reset();
 }
 
 void SharedMap::noteIntegrated(const std::string& source, const ros::Time& stamp) {
-  const std::lock_guard<std::mutex> lock(stamps_mutex_);
-  ros::Time& newest = integrated_stamps_[source];
-  if (stamp > newest) newest = stamp;
+  const std::lock_guard<std::mutex> lock(integrated_mutex_);
+  integrated_.push_back({++integrated_count_, source, stamp});
+  if (integrated_.size() > kIntegratedLogSize) integrated_.pop_front();
 }
 
-std::map<std::string, ros::Time> SharedMap::integratedStamps() const {
-  const std::lock_guard<std::mutex> lock(stamps_mutex_);
-  return integrated_stamps_;
+std::vector<SharedMap::IntegratedFrame> SharedMap::integratedSince(std::uint64_t after) const {
+  const std::lock_guard<std::mutex> lock(integrated_mutex_);
+  std::vector<IntegratedFrame> frames;
+  for (auto it = integrated_.rbegin(); it != integrated_.rend() && it->number > after; ++it) {
+    frames.push_back(*it);
+  }
+  std::reverse(frames.begin(), frames.end());
+  return frames;
 }
 
 MapRegistry& MapRegistry::instance() {

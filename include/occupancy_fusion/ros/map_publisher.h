@@ -131,6 +131,7 @@ class MapPublisher {
   SentVersion grid_sent_, markers_sent_, cloud_sent_, binary_sent_;
   ros::Publisher grid_publisher_, markers_publisher_, cloud_publisher_, binary_publisher_;
   ros::Publisher grid_stamps_publisher_;  // projected_map_stamps: what each projected_map holds
+  std::uint64_t grid_frames_listed_ = 0;  // the last frame number of the map's log sent with it
   ros::ServiceServer reset_service_, clear_box_service_, save_map_service_;
   // Wall clock: with use_sim_time a bag that has ended stops ROS time, and a subscriber joining
   // then must still get the current map, not a stale latched one.

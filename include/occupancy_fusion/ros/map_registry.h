@@ -4,10 +4,13 @@
 // parameters and later users must agree on the geometry.
 #pragma once
 
+#include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include <ros/time.h>
 
@@ -31,9 +34,8 @@ struct SharedMapConfig {
 // map_name, frame_id, and everything readVoxelMapConfig reads.
 SharedMapConfig readSharedMapConfig(const ParameterSource& source);
 
-// The 3D voxel map and the 2D laser layer of one map, and the newest stamp each input source
-// integrated into them. The maps are thread-safe on their own (see VoxelMap); the stamps have a
-// lock of their own.
+// The 3D voxel map and the 2D laser layer of one map, and a log of the frames integrated into
+// them. The maps are thread-safe on their own (see VoxelMap); the log has a lock of its own.
 class SharedMap {
  public:
   explicit SharedMap(const SharedMapConfig& config);
@@ -49,18 +51,25 @@ class SharedMap {
   void reset();  // forgets everything: all voxels and cells unknown again
 
   // A frame of `source` (its input topic) stamped `stamp` is in the map: called by a mapper after
-  // the write. The newest stamp per source is kept (a stamp older than it changes nothing).
+  // the write. The map keeps the last kIntegratedLogSize of them, numbered in that order.
   void noteIntegrated(const std::string& source, const ros::Time& stamp);
-  // The newest stamp integrated per source, read before the map is read for an output: every
-  // frame it lists is in what is read next.
-  std::map<std::string, ros::Time> integratedStamps() const;
+  struct IntegratedFrame {
+    std::uint64_t number;  // 1, 2, ... in the order noted
+    std::string source;
+    ros::Time stamp;
+  };
+  static constexpr std::size_t kIntegratedLogSize = 4096;
+  // The frames noted after frame number `after` (0: all kept), oldest first. Read before the map
+  // is read for an output, every frame it returns is in what is read next.
+  std::vector<IntegratedFrame> integratedSince(std::uint64_t after) const;
 
  private:
   SharedMapConfig config_;
   VoxelMap voxels_;
   GridLayer2D layer_;
-  mutable std::mutex stamps_mutex_;
-  std::map<std::string, ros::Time> integrated_stamps_;
+  mutable std::mutex integrated_mutex_;
+  std::deque<IntegratedFrame> integrated_;  // the last kIntegratedLogSize frames noted
+  std::uint64_t integrated_count_ = 0;
 };
 
 class MapRegistry {

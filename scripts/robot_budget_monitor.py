@@ -1,0 +1,219 @@
+#!/usr/bin/env python3
+"""Measures a running robot-budget graph (scripts/robot_budget.sh): per sensor topic the frames
+sent, integrated and dropped, and the latency from each frame's stamp to the arrival here of the
+first projected_map that holds it (the MapServer's projected_map_stamps lists, per topic, the
+newest stamp integrated before each grid was built); the mapping manager's and the simulator's
+CPU share of the machine's cores.
+
+Sensor messages are not deserialised: every watched message type starts with its std_msgs/Header,
+whose stamp is read from the raw bytes. Stamps are wall time (no simulated clock), so a latency is
+this node's wall clock at the grid's arrival minus the frame's stamp.
+
+Writes a CSV with one row per window (--window s): per topic the frames sent, the median and the
+99th percentile latency of the frames stamped in it; the processes' CPU share. Prints a summary.
+
+Usage: robot_budget_monitor.py --duration S --warmup S --csv FILE --summary FILE
+       [--manager NAME] [--simulator NAME] [--topic TOPIC]...
+"""
+import argparse
+import bisect
+import csv
+import os
+import struct
+import threading
+import time
+import xmlrpc.client
+
+import rosgraph
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray
+from occupancy_fusion.msg import IntegratedStamps
+
+# The mappers' diagnostics task of each sensor topic's frames.
+TASKS = {"depth": "depth mapping", "disparity": "disparity mapping", "scan": "laser mapping"}
+STAMP_TOLERANCE_S = 1e-6  # the mappers keep stamps as double seconds
+
+
+def node_pid(node_name):
+    """The pid of a running ROS node, asked from the node itself (XML-RPC getPid)."""
+    uri = rosgraph.Master("/robot_budget_monitor").lookupNode(node_name)
+    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/robot_budget_monitor")
+    if code != 1:
+        raise RuntimeError("getPid failed for " + node_name)
+    return int(pid)
+
+
+def cpu_seconds(pid):
+    """User and system CPU time of a process and its threads (stat(5) fields 14 and 15)."""
+    with open("/proc/%d/stat" % pid) as stat:
+        fields = stat.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def header_stamp(raw):
+    """The stamp of a serialised message whose first field is a std_msgs/Header (seq, secs, nsecs)."""
+    secs, nsecs = struct.unpack_from("<II", raw, 4)
+    return secs + nsecs * 1e-9
+
+
+def percentile(values, fraction):
+    """The value of rank fraction * (n - 1), nearest rank; None without values."""
+    if not values:
+        return None
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(round(fraction * (len(ordered) - 1))))]
+
+
+class Recorder:
+    """Frames sent per topic (stamps) and the grids' arrivals with what each held."""
+
+    def __init__(self, topics):
+        self.lock = threading.Lock()
+        self.sent = {topic: [] for topic in topics}
+        self.grids = []  # (wall arrival, {topic: newest stamp held})
+        self.diagnostics = {}
+        for topic in topics:
+            rospy.Subscriber(topic, rospy.AnyMsg, self.on_frame, callback_args=topic,
+                             queue_size=200)
+        rospy.Subscriber("projected_map_stamps", IntegratedStamps, self.on_grid, queue_size=50)
+        # The outputs a planner and rviz read, watched so that the MapServer builds them.
+        self.outputs = [rospy.Subscriber(topic, rospy.AnyMsg, lambda _: None, queue_size=1)
+                        for topic in ("projected_map", "occupied_cells_vis_array")]
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=20)
+
+    def on_frame(self, message, topic):
+        stamp = header_stamp(message._buff)
+        with self.lock:
+            self.sent[topic].append(stamp)
+
+    def on_grid(self, message):
+        arrival = time.time()
+        held = {source: stamp.to_sec() for source, stamp in zip(message.sources, message.stamps)}
+        with self.lock:
+            self.grids.append((arrival, held))
+
+    def on_diagnostics(self, array):
+        with self.lock:
+            for status in array.status:
+                if status.values:
+                    self.diagnostics[status.name] = {kv.key: kv.value for kv in status.values}
+
+    def counts(self, task):
+        with self.lock:
+            for name, values in self.diagnostics.items():
+                if name.endswith(task):
+                    return dict(values)
+        return {}
+
+
+def latencies(sent, grids, topic):
+    """Per frame stamp: seconds from the stamp to the first grid holding it; None if none did."""
+    # The newest stamp each grid held of `topic`, never going back (see IntegratedStamps).
+    arrivals = [arrival for arrival, _ in grids]
+    held = [h.get(topic, float("-inf")) for _, h in grids]
+    for i in range(1, len(held)):
+        held[i] = max(held[i], held[i - 1])
+    result = {}
+    for stamp in sent:
+        index = bisect.bisect_left(held, stamp - STAMP_TOLERANCE_S)
+        result[stamp] = arrivals[index] - stamp if index < len(held) else None
+    return result
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--duration", type=float, required=True, help="s measured")
+    parser.add_argument("--warmup", type=float, default=10.0, help="s before measuring")
+    parser.add_argument("--window", type=float, default=5.0, help="s per CSV row")
+    parser.add_argument("--manager", default="/occupancy_fusion_manager")
+    parser.add_argument("--simulator", default="/simulator")
+    parser.add_argument("--topic", action="append", required=True,
+                        help="a sensor topic (resolved name); repeat for each")
+    parser.add_argument("--csv", required=True)
+    parser.add_argument("--summary", required=True)
+    args = parser.parse_args(rospy.myargv()[1:])
+
+    rospy.init_node("robot_budget_monitor", disable_signals=True)
+    recorder = Recorder(args.topic)
+    manager_pid, simulator_pid = node_pid(args.manager), node_pid(args.simulator)
+    cores = os.cpu_count()
+    time.sleep(args.warmup)
+    start = time.time()
+    start_counts = {task: recorder.counts(task) for task in TASKS.values()}
+    cpu_start = {pid: cpu_seconds(pid) for pid in (manager_pid, simulator_pid)}
+    windows = []
+    next_window = start + args.window
+    while time.time() < start + args.duration:
+        time.sleep(max(0.0, min(next_window, start + args.duration) - time.time()))
+        now = time.time()
+        windows.append((now, {pid: cpu_seconds(pid) for pid in (manager_pid, simulator_pid)}))
+        next_window += args.window
+    end = time.time()
+    end_counts = {task: recorder.counts(task) for task in TASKS.values()}
+    time.sleep(1.0)  # grids holding the last frames of the run
+    with recorder.lock:
+        sent = {topic: [s for s in stamps if start <= s < end]
+                for topic, stamps in recorder.sent.items()}
+        grids = list(recorder.grids)
+
+    per_topic = {topic: latencies(stamps, grids, topic) for topic, stamps in sent.items()}
+    columns = ["elapsed_s", "manager_cpu_share", "simulator_cpu_share"]
+    for topic in args.topic:
+        columns += [topic + " frames", topic + " latency_median_ms", topic + " latency_p99_ms"]
+    with open(args.csv, "w", newline="") as out:
+        writer = csv.DictWriter(out, fieldnames=columns)
+        writer.writeheader()
+        previous_time, previous_cpu = start, cpu_start
+        for now, cpu in windows:
+            row = {"elapsed_s": "%.1f" % (now - start)}
+            for name, pid in (("manager", manager_pid), ("simulator", simulator_pid)):
+                share = (cpu[pid] - previous_cpu[pid]) / ((now - previous_time) * cores)
+                row[name + "_cpu_share"] = "%.3f" % share
+            for topic in args.topic:
+                values = [v for s, v in per_topic[topic].items()
+                          if previous_time <= s < now and v is not None]
+                row[topic + " frames"] = len(values)
+                for key, fraction in (("latency_median_ms", 0.5), ("latency_p99_ms", 0.99)):
+                    value = percentile(values, fraction)
+                    row[topic + " " + key] = "" if value is None else "%.1f" % (1e3 * value)
+            writer.writerow(row)
+            previous_time, previous_cpu = now, cpu
+
+    lines = ["robot budget: %.0f s measured after %.0f s warm-up, %d cores" %
+             (end - start, args.warmup, cores)]
+    for name, pid in (("mapping manager", manager_pid), ("simulator", simulator_pid)):
+        share = (windows[-1][1][pid] - cpu_start[pid]) / ((windows[-1][0] - start) * cores)
+        lines.append("%s CPU: %.1f %% of %d cores" % (name, 100.0 * share, cores))
+    all_latencies = []
+    for topic in args.topic:
+        values = [v for v in per_topic[topic].values() if v is not None]
+        all_latencies += values
+        never = sum(1 for v in per_topic[topic].values() if v is None)
+        median, p99 = percentile(values, 0.5), percentile(values, 0.99)
+        lines.append("%s: %d frames sent, %d in a published grid, %d never; latency median %s ms,"
+                     " p99 %s ms, rate %.1f Hz" % (
+                         topic, len(sent[topic]), len(values), never,
+                         "-" if median is None else "%.1f" % (1e3 * median),
+                         "-" if p99 is None else "%.1f" % (1e3 * p99),
+                         len(sent[topic]) / (end - start)))
+    for kind, task in TASKS.items():
+        before, after = start_counts[task], end_counts[task]
+        delta = {key: int(after.get(key, 0)) - int(before.get(key, 0))
+                 for key in ("frames received", "frames integrated", "frames dropped")}
+        dropped = {key: int(after[key]) - int(before.get(key, 0)) for key in after
+                   if key.startswith("frames dropped (") and int(after[key]) > int(before.get(key, 0))}
+        lines.append("%s: received %d, integrated %d, dropped %d %s; integration ms mean %s, max %s"
+                     % (task, delta["frames received"], delta["frames integrated"],
+                        delta["frames dropped"], dropped or "",
+                        after.get("integration ms (mean)", "-"),
+                        after.get("integration ms (max)", "-")))
+    lines.append("all sensors: latency median %.1f ms, p99 %.1f ms" % (
+        1e3 * percentile(all_latencies, 0.5), 1e3 * percentile(all_latencies, 0.99))
+        if all_latencies else "all sensors: no frame reached a published grid")
+    with open(args.summary, "w") as out:
+        out.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
