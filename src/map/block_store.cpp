@@ -1,6 +1,12 @@
 #include "occupancy_fusion/map/block_store.h"
 
+#include <fcntl.h>
 #include <lmdb.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +26,7 @@ constexpr char kMetaTable[] = "meta";
 constexpr char kFormatKey[] = "format_version";
 constexpr char kBlockSideKey[] = "block_side";
 constexpr char kResolutionKey[] = "resolution";
+constexpr char kLockFile[] = "in_use.lock";
 
 // Keys are stored big-endian, so LMDB's byte order is the keys' numeric order on every machine.
 struct KeyBytes {
@@ -103,16 +110,44 @@ BlockStore::BlockStore(const BlockStoreConfig& config) : config_(config) {
     throw std::runtime_error("block store '" + config_.folder +
                              "': cannot create the folder: " + error.message());
   }
-  open();
+  lockFolder();
   try {
+    open();
     checkOrWriteMetadata();
   } catch (...) {
-    mdb_env_close(env_);
+    close();
     throw;
   }
 }
 
-BlockStore::~BlockStore() { mdb_env_close(env_); }
+BlockStore::~BlockStore() { close(); }
+
+void BlockStore::close() {
+  mdb_env_close(env_);  // accepts nullptr
+  env_ = nullptr;
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
+  lock_fd_ = -1;
+}
+
+void BlockStore::lockFolder() {
+  // LMDB must not open one environment twice in a process, and two maps would empty and
+  // overwrite each other's blocks: one store, one user. flock conflicts between two opens in one
+  // process as between processes, and ends with the process.
+  const std::string path = config_.folder + "/" + kLockFile;
+  lock_fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0664);
+  if (lock_fd_ < 0) {
+    throw std::runtime_error("block store '" + config_.folder + "': cannot create " + kLockFile +
+                             ": " + std::strerror(errno));
+  }
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw std::runtime_error("block store '" + config_.folder + "': " +
+                             (error == EWOULDBLOCK ? std::string("in use by another map")
+                                                   : std::string(std::strerror(error))));
+  }
+}
 
 void BlockStore::fail(const std::string& what, int code) const {
   throw std::runtime_error("block store '" + config_.folder + "': " + what + " (" +

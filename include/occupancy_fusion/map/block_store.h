@@ -28,7 +28,8 @@ struct BlockStoreConfig {
 // Beside the blocks, a metadata table holds the format version, the block side and the map's
 // resolution. Every failure throws std::runtime_error naming the folder: a folder that cannot be
 // created or written, a store of another resolution, block side or format, a damaged store, a
-// write that does not fit in max_bytes.
+// write that does not fit in max_bytes, a folder in use by another store (in this process or
+// another: the store holds an exclusive flock on in_use.lock in its folder while open).
 //
 // Commits are not flushed to disk one by one (MDB_NOSYNC): a process that dies keeps every
 // committed write (they are in the system's page cache), a system crash may lose the newest.
@@ -65,12 +66,15 @@ class BlockStore {
   std::size_t sizeLimit() const;  // the current map size, bytes
 
  private:
+  void lockFolder();
   void open();
+  void close();
   void checkOrWriteMetadata();
   void grow(std::size_t current);
   [[noreturn]] void fail(const std::string& what, int code) const;
 
   BlockStoreConfig config_;
+  int lock_fd_ = -1;  // holds the folder's flock while the store is open
   MDB_env* env_ = nullptr;
   unsigned int blocks_dbi_ = 0;
   unsigned int meta_dbi_ = 0;

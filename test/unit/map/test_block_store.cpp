@@ -201,6 +201,19 @@ TEST_F(BlockStoreTest, StoreOfAnotherResolutionIsRefusedNamingTheFolder) {
   EXPECT_NO_THROW(BlockStore store(storeConfig(folder, 0.05)));
 }
 
+TEST_F(BlockStoreTest, FolderInUseIsRefusedNamingTheFolder) {
+  const std::string folder = path("store");
+  {
+    BlockStore first(storeConfig(folder));
+    first.put(packKey(Eigen::Vector3i(1, 2, 3)), VoxelBlock());
+    const std::string message = errorOf([&] { BlockStore second(storeConfig(folder)); }, folder);
+    EXPECT_NE(message.find("in use"), std::string::npos) << message;
+    EXPECT_EQ(first.size(), 1u);  // the refused store touched nothing
+  }
+  BlockStore after(storeConfig(folder));  // free again once the first is closed
+  EXPECT_EQ(after.size(), 1u);
+}
+
 TEST_F(BlockStoreTest, UnwritableFolderIsRefusedNamingTheFolder) {
   // Under a regular file: no folder can be made there, whoever runs the test.
   std::ofstream(path("file")) << "not a folder";
