@@ -2,12 +2,14 @@
 // store is reopened, and every bad store gives a std::runtime_error naming its folder.
 #include <gtest/gtest.h>
 
+#include <lmdb.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -199,6 +201,46 @@ TEST_F(BlockStoreTest, StoreOfAnotherResolutionIsRefusedNamingTheFolder) {
   EXPECT_NE(message.find("written with resolution 0.05 m, the map's is 0.1 m"), std::string::npos)
       << message;
   EXPECT_NO_THROW(BlockStore store(storeConfig(folder, 0.05)));
+}
+
+// Replaces the value of the store's first block with `bytes`, through LMDB itself.
+void damageFirstBlock(const std::string& folder, const std::string& bytes) {
+  MDB_env* env = nullptr;
+  ASSERT_EQ(mdb_env_create(&env), MDB_SUCCESS);
+  ASSERT_EQ(mdb_env_set_maxdbs(env, 2), MDB_SUCCESS);
+  ASSERT_EQ(mdb_env_open(env, folder.c_str(), 0, 0664), MDB_SUCCESS);
+  MDB_txn* txn = nullptr;
+  ASSERT_EQ(mdb_txn_begin(env, nullptr, 0, &txn), MDB_SUCCESS);
+  MDB_dbi blocks;
+  ASSERT_EQ(mdb_dbi_open(txn, "blocks", 0, &blocks), MDB_SUCCESS);
+  MDB_cursor* cursor = nullptr;
+  ASSERT_EQ(mdb_cursor_open(txn, blocks, &cursor), MDB_SUCCESS);
+  MDB_val key, value;
+  ASSERT_EQ(mdb_cursor_get(cursor, &key, &value, MDB_FIRST), MDB_SUCCESS);
+  MDB_val damaged{bytes.size(), const_cast<char*>(bytes.data())};
+  ASSERT_EQ(mdb_cursor_put(cursor, &key, &damaged, MDB_CURRENT), MDB_SUCCESS);
+  mdb_cursor_close(cursor);
+  ASSERT_EQ(mdb_txn_commit(txn), MDB_SUCCESS);
+  mdb_env_close(env);
+}
+
+TEST_F(BlockStoreTest, DamagedBlockIsReportedNamingTheFolder) {
+  const std::string folder = path("store");
+  const std::map<std::uint64_t, VoxelBlock> blocks = randomBlocks(7, 12);
+  {
+    BlockStore store(storeConfig(folder));
+    putAll(&store, blocks);
+  }
+  damageFirstBlock(folder, "12345");  // no encoding: shorter than a brick mask
+  BlockStore store(storeConfig(folder));
+  VoxelBlock read;
+  std::string message = errorOf([&] { store.get(blocks.begin()->first, &read); }, folder);
+  EXPECT_NE(message.find("damaged"), std::string::npos) << message;
+  message = errorOf([&] { store.forEach([](std::uint64_t, const VoxelBlock&) {}); }, folder);
+  EXPECT_NE(message.find("damaged"), std::string::npos) << message;
+  // The other blocks still read.
+  ASSERT_TRUE(store.get(std::next(blocks.begin())->first, &read));
+  EXPECT_TRUE(sameVoxels(read, std::next(blocks.begin())->second));
 }
 
 TEST_F(BlockStoreTest, FolderInUseIsRefusedNamingTheFolder) {
