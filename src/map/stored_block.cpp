@@ -1,6 +1,8 @@
 #include "occupancy_fusion/map/stored_block.h"
 
+#include <array>
 #include <cmath>
+#include <cstring>
 
 namespace occupancy_fusion {
 
@@ -38,6 +40,31 @@ std::uint64_t BrickLayout::knownBricks(const VoxelBlock& block) {
     }
   }
   return mask;
+}
+
+void BrickEncoding::encode(const VoxelBlock& block, std::vector<unsigned char>* out) {
+  const std::uint64_t mask = BrickLayout::knownBricks(block);
+  out->resize(sizeFor(mask));
+  std::memcpy(out->data(), &mask, sizeof(mask));
+  BrickLayout::packBricks(block, mask, reinterpret_cast<float*>(out->data() + sizeof(mask)));
+}
+
+bool BrickEncoding::decode(const void* bytes, std::size_t size, VoxelBlock* out) {
+  std::uint64_t mask = 0;
+  if (size < sizeof(mask)) return false;
+  std::memcpy(&mask, bytes, sizeof(mask));
+  if (size != sizeFor(mask)) return false;
+  // The bytes may be unaligned for floats (they come from a store): copy them out first.
+  const std::size_t floats = (size - sizeof(mask)) / sizeof(float);
+  std::array<float, VoxelBlock::kVolume> bricks;
+  std::memcpy(bricks.data(), static_cast<const unsigned char*>(bytes) + sizeof(mask),
+              floats * sizeof(float));
+  out->log_odds.fill(VoxelBlock::kUnknown);
+  BrickLayout::expandBricks(mask, bricks.data(), out);
+  out->known_count = 0;
+  for (std::size_t i = 0; i < floats; ++i) out->known_count += VoxelBlock::isKnown(bricks[i]);
+  out->version = 0;
+  return true;
 }
 
 }  // namespace occupancy_fusion

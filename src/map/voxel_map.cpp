@@ -1,9 +1,12 @@
 #include "occupancy_fusion/map/voxel_map.h"
 
 #include <algorithm>
+#include <exception>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+
+#include "occupancy_fusion/map/block_store.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -39,7 +42,17 @@ VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
   min_log_odds_ = config_.model.minLogOdds();
   max_log_odds_ = config_.model.maxLogOdds();
   threshold_log_odds_ = config_.model.thresholdLogOdds();
+  if (config_.max_memory_bytes > 0 && !config_.spill_folder.empty()) {
+    BlockStoreConfig store;
+    store.folder = config_.spill_folder;
+    store.resolution = config_.resolution;
+    store.max_bytes = config_.spill_max_bytes;
+    store_ = std::make_unique<BlockStore>(store);
+    store_->clear();  // the map starts empty: blocks of an earlier run would read as this map's
+  }
 }
+
+VoxelMap::~VoxelMap() = default;
 
 VoxelIndex VoxelMap::indexOf(const Eigen::Vector3d& point) const {
   return (point / config_.resolution).array().floor().cast<int>();
@@ -74,10 +87,75 @@ const StoredBlock* VoxelMap::findBlock(const BlockIndex& block) const {
   return it == blocks_.end() ? nullptr : &it->second;
 }
 
+const VoxelBlock* VoxelMap::viewBlock(std::uint64_t key, VoxelBlock* scratch) const {
+  auto it = blocks_.find(key);
+  if (it != blocks_.end()) return &it->second.view(scratch);
+  if (spilled_.find(key) != spilled_.end() && readSpilled(key, scratch)) return scratch;
+  return nullptr;
+}
+
+bool VoxelMap::readSpilled(std::uint64_t key, VoxelBlock* out) const {
+  try {
+    if (store_->get(key, out)) return true;
+    throw std::runtime_error("block store '" + config_.spill_folder + "': block " +
+                             std::to_string(key) + " is missing");
+  } catch (const std::exception& error) {
+    recordStoreFailure(error);
+    return false;
+  }
+}
+
+void VoxelMap::recordStoreFailure(const std::exception& error) const {
+  std::lock_guard<std::mutex> lock(failure_mutex_);
+  ++store_failures_;
+  last_store_error_ = error.what();
+}
+
+void VoxelMap::forgetSpilled(std::uint64_t key) {
+  auto it = spilled_.find(key);
+  spilled_known_voxels_ -= static_cast<std::size_t>(it->second);
+  spilled_.erase(it);
+}
+
+std::optional<StoredBlock> VoxelMap::takeSpilled(std::uint64_t key) {
+  if (spilled_.find(key) == spilled_.end()) return std::nullopt;
+  VoxelBlock block;
+  const bool read = readSpilled(key, &block);
+  forgetSpilled(key);
+  if (!read) {
+    // Lost, as an evicted block is: consumers must forget what they derived from it.
+    markRemoved(key);
+    ++evicted_blocks_;
+    return std::nullopt;
+  }
+  ++blocks_paged_in_;
+  StoredBlock stored = StoredBlock::newDense();
+  *stored.dense() = block;  // version 0: its first write in a call logs it
+  if (hybrid()) stored.settle(kMaxSparseBricks);
+  return stored;
+}
+
+void VoxelMap::pageInSpilledInRange(const BlockIndex& lo, const BlockIndex& hi) {
+  std::vector<std::uint64_t> keys;
+  for (const auto& entry : spilled_) {
+    const BlockIndex block = unpackKey3(entry.first);
+    if ((block.array() >= lo.array()).all() && (block.array() <= hi.array()).all()) {
+      keys.push_back(entry.first);
+    }
+  }
+  for (std::uint64_t key : keys) {
+    std::optional<StoredBlock> stored = takeSpilled(key);
+    if (!stored) continue;
+    block_bytes_ += stored->bytes();
+    blocks_.emplace(key, std::move(*stored));
+  }
+}
+
 StoredBlock& VoxelMap::storedForWrite(std::uint64_t key) {
   auto it = blocks_.find(key);
   if (it == blocks_.end()) {
-    it = blocks_.emplace(key, StoredBlock::newDense()).first;
+    std::optional<StoredBlock> spilled = takeSpilled(key);
+    it = blocks_.emplace(key, spilled ? std::move(*spilled) : StoredBlock::newDense()).first;
     block_bytes_ += it->second.bytes();
   }
   StoredBlock& result = it.value();
@@ -124,9 +202,15 @@ void VoxelMap::finishWrite() {
 
 std::optional<float> VoxelMap::logOdds(const VoxelIndex& index) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  const StoredBlock* block = findBlock(blockOf(index));
-  if (block == nullptr) return std::nullopt;
-  const float value = block->at(linearIndexInBlock(index));
+  const std::uint64_t key = packKey(blockOf(index));
+  float value = VoxelBlock::kUnknown;
+  auto it = blocks_.find(key);
+  if (it != blocks_.end()) {
+    value = it->second.at(linearIndexInBlock(index));
+  } else if (spilled_.find(key) != spilled_.end()) {
+    VoxelBlock block;
+    if (readSpilled(key, &block)) value = block.log_odds[linearIndexInBlock(index)];
+  }
   if (!VoxelBlock::isKnown(value)) return std::nullopt;
   return value;
 }
@@ -208,6 +292,8 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
   const VoxelIndex hi = indexOf(max);
   const BlockIndex block_lo = blockOf(lo);
   const BlockIndex block_hi = blockOf(hi);
+  // Spilled blocks in the box are cleared in memory; the bound spills them again afterwards.
+  pageInSpilledInRange(block_lo, block_hi);
   std::size_t changed = 0;
   VoxelBlock scratch;
   for (auto it = blocks_.begin(); it != blocks_.end(); ++it) {
@@ -246,6 +332,15 @@ void VoxelMap::reset() {
   std::unique_lock<std::shared_mutex> lock(mutex_);
   blocks_.clear();
   block_bytes_ = 0;
+  spilled_.clear();
+  spilled_known_voxels_ = 0;
+  if (store_ != nullptr) {
+    try {
+      store_->clear();
+    } catch (const std::exception& error) {
+      recordStoreFailure(error);  // what it still holds is no longer indexed, so never read
+    }
+  }
   // Consumers holding older versions must rebuild from scratch.
   change_log_.clear(version_ + 1);
   ++version_;
@@ -259,6 +354,25 @@ void VoxelMap::setFocus(const Eigen::Vector3d& sensor_origin) {
 void VoxelMap::enforceMemoryBound() {
   // The bound covers the voxel storage; the change log holds about one entry per block.
   if (config_.max_memory_bytes == 0 || storageBytesLocked() <= config_.max_memory_bytes) return;
+  const std::vector<std::uint64_t> leaving = farthestBlocksOverTarget();
+  const bool spilled = store_ != nullptr && spillToStore(leaving);
+  for (std::uint64_t key : leaving) {
+    auto it = blocks_.find(key);
+    if (spilled) {
+      const int known = it->second.knownCount();
+      spilled_.emplace(key, known);
+      spilled_known_voxels_ += static_cast<std::size_t>(known);
+    } else {
+      markRemoved(key);
+      ++evicted_blocks_;
+    }
+    block_bytes_ -= it->second.bytes();
+    blocks_.erase(it);
+  }
+  if (spilled) blocks_spilled_ += leaving.size();
+}
+
+std::vector<std::uint64_t> VoxelMap::farthestBlocksOverTarget() const {
   const Eigen::Vector3d focus_in_blocks = focus_ / (config_.resolution * VoxelBlock::kSide);
   std::vector<std::pair<double, std::uint64_t>> by_distance;
   by_distance.reserve(blocks_.size());
@@ -269,22 +383,57 @@ void VoxelMap::enforceMemoryBound() {
   std::sort(by_distance.begin(), by_distance.end(),
             [](const auto& a, const auto& b) { return a.first > b.first; });
   const std::size_t target = config_.max_memory_bytes / 10 * 9;
-  for (const auto& [distance, key] : by_distance) {
-    if (storageBytesLocked() <= target) break;
-    auto it = blocks_.find(key);
-    block_bytes_ -= it->second.bytes();
-    blocks_.erase(it);
-    markRemoved(key);
-    ++evicted_blocks_;
+  std::size_t bytes = storageBytesLocked();
+  std::vector<std::uint64_t> leaving;
+  for (const auto& entry : by_distance) {
+    if (bytes <= target) break;
+    bytes -= blocks_.find(entry.second)->second.bytes();
+    leaving.push_back(entry.second);
   }
+  return leaving;
+}
+
+bool VoxelMap::spillToStore(const std::vector<std::uint64_t>& keys) {
+  VoxelBlock scratch;
+  try {
+    store_->put(keys, [&](std::size_t i) -> const VoxelBlock& {
+      return blocks_.find(keys[i])->second.view(&scratch);
+    });
+    return true;
+  } catch (const std::exception& error) {
+    recordStoreFailure(error);  // the blocks are dropped instead
+    return false;
+  }
+}
+
+void VoxelMap::forEachBlockLocked(const BlockFn& fn) const {
+  VoxelBlock scratch;
+  for (const auto& [key, stored] : blocks_) fn(unpackKey3(key), stored.view(&scratch));
+  forEachSpilledBlock(fn);
+}
+
+void VoxelMap::forEachSpilledBlock(const BlockFn& fn) const {
+  if (spilled_.empty()) return;
+  // An exception of fn is the caller's, not a store failure: it ends the walk and is rethrown.
+  std::exception_ptr from_fn;
+  try {
+    store_->forEach([&](std::uint64_t key, const VoxelBlock& block) {
+      if (from_fn || spilled_.find(key) == spilled_.end()) return;  // paged in since
+      try {
+        fn(unpackKey3(key), block);
+      } catch (...) {
+        from_fn = std::current_exception();
+      }
+    });
+  } catch (const std::exception& error) {
+    recordStoreFailure(error);
+  }
+  if (from_fn) std::rethrow_exception(from_fn);
 }
 
 void VoxelMap::forEachVoxelIf(const VoxelFn& fn, int which) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  VoxelBlock scratch;
-  for (const auto& [key, stored] : blocks_) {
-    const BlockIndex block_index = unpackKey3(key);
-    const VoxelBlock& block = stored.view(&scratch);
+  forEachBlockLocked([&](const BlockIndex& block_index, const VoxelBlock& block) {
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       const float value = block.log_odds[linear];
       if (!VoxelBlock::isKnown(value)) continue;
@@ -292,7 +441,7 @@ void VoxelMap::forEachVoxelIf(const VoxelFn& fn, int which) const {
       if ((which == kOnlyOccupied && !occupied) || (which == kOnlyFree && occupied)) continue;
       fn(voxelIndex(block_index, linear), value);
     }
-  }
+  });
 }
 
 void VoxelMap::forEachKnownVoxel(const VoxelFn& fn) const { forEachVoxelIf(fn, kAnyKnown); }
@@ -307,9 +456,7 @@ void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::V
   std::shared_lock<std::shared_mutex> lock(mutex_);
   const BlockIndex block_lo = blockOf(lo);
   const BlockIndex block_hi = blockOf(hi);
-  VoxelBlock scratch;
-  auto visit_block = [&](const BlockIndex& block_index, const StoredBlock& stored) {
-    const VoxelBlock& block = stored.view(&scratch);
+  auto visit_block = [&](const BlockIndex& block_index, const VoxelBlock& block) {
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       const float value = block.log_odds[linear];
       if (!VoxelBlock::isKnown(value)) continue;
@@ -321,25 +468,25 @@ void VoxelMap::forEachKnownVoxelInBox(const Eigen::Vector3d& min, const Eigen::V
   };
   const Eigen::Array3i extent = (block_hi - block_lo).array() + 1;
   const double box_blocks = extent.cast<double>().prod();
-  if (box_blocks <= static_cast<double>(blocks_.size())) {
+  if (box_blocks <= static_cast<double>(blocks_.size() + spilled_.size())) {
     // A small box: look its blocks up.
+    VoxelBlock scratch;
     for (int z = block_lo.z(); z <= block_hi.z(); ++z)
       for (int y = block_lo.y(); y <= block_hi.y(); ++y)
         for (int x = block_lo.x(); x <= block_hi.x(); ++x) {
-          const StoredBlock* block = findBlock({x, y, z});
+          const VoxelBlock* block = viewBlock(packKey(BlockIndex(x, y, z)), &scratch);
           if (block != nullptr) visit_block({x, y, z}, *block);
         }
     return;
   }
   // A box larger than the map: walk the map's blocks instead.
-  for (const auto& [key, block] : blocks_) {
-    const BlockIndex block_index = unpackKey3(key);
+  forEachBlockLocked([&](const BlockIndex& block_index, const VoxelBlock& block) {
     if ((block_index.array() < block_lo.array()).any() ||
         (block_index.array() > block_hi.array()).any()) {
-      continue;
+      return;
     }
     visit_block(block_index, block);
-  }
+  });
 }
 
 VoxelCounts VoxelMap::countInBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) const {
@@ -366,14 +513,13 @@ VoxelCounts VoxelMap::countInBox(const Eigen::Vector3d& min, const Eigen::Vector
 void VoxelMap::forEachBlock(
     const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  VoxelBlock scratch;
-  for (const auto& [key, stored] : blocks_) fn(unpackKey3(key), stored.view(&scratch));
+  forEachBlockLocked(fn);
 }
 
 std::vector<VoxelMap::BlockCopy> VoxelMap::copyBlocks() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   std::vector<BlockCopy> copies;
-  copies.reserve(blocks_.size());
+  copies.reserve(blocks_.size() + spilled_.size());
   for (const auto& [key, stored] : blocks_) {
     if (stored.isDense()) {
       copies.emplace_back(unpackKey3(key), *stored.dense());
@@ -382,15 +528,20 @@ std::vector<VoxelMap::BlockCopy> VoxelMap::copyBlocks() const {
       stored.copyTo(&copies.back().second);
     }
   }
+  forEachSpilledBlock(
+      [&](const BlockIndex& index, const VoxelBlock& block) { copies.emplace_back(index, block); });
   return copies;
 }
 
 bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   const StoredBlock* found = findBlock(block);
-  if (found == nullptr) return false;
-  found->copyTo(out);
-  return true;
+  if (found != nullptr) {
+    found->copyTo(out);
+    return true;
+  }
+  const std::uint64_t key = packKey(block);
+  return spilled_.find(key) != spilled_.end() && readSpilled(key, out);
 }
 
 MapChanges VoxelMap::changesSince(std::uint64_t version) const {
@@ -414,14 +565,14 @@ std::uint64_t VoxelMap::version() const {
 
 std::size_t VoxelMap::blockCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  return blocks_.size();
+  return blocks_.size() + spilled_.size();
 }
 
 std::size_t VoxelMap::knownVoxelCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   std::size_t count = 0;
   for (const auto& entry : blocks_) count += static_cast<std::size_t>(entry.second.knownCount());
-  return count;
+  return count + spilled_known_voxels_;
 }
 
 std::size_t VoxelMap::storageBytesLocked() const {
@@ -429,7 +580,8 @@ std::size_t VoxelMap::storageBytesLocked() const {
 }
 
 std::size_t VoxelMap::memoryBytesLocked() const {
-  return storageBytesLocked() + change_log_.memoryBytes();
+  return storageBytesLocked() + change_log_.memoryBytes() +
+         spilled_.bucket_count() * kTableSlotBytes;
 }
 
 std::size_t VoxelMap::memoryBytes() const {
@@ -452,12 +604,28 @@ VoxelMap::StorageStats VoxelMap::storageStats() const {
   stats.block_bytes = block_bytes_;
   stats.table_bytes = blocks_.bucket_count() * kTableSlotBytes;
   stats.change_log_bytes = change_log_.memoryBytes();
+  stats.spilled_blocks = spilled_.size();
+  stats.spill_index_bytes = spilled_.bucket_count() * kTableSlotBytes;
   return stats;
 }
 
 std::size_t VoxelMap::evictedBlockCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   return evicted_blocks_;
+}
+
+SpillStatus VoxelMap::spillStatus() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  SpillStatus status;
+  status.enabled = store_ != nullptr;
+  if (status.enabled) status.folder = config_.spill_folder;
+  status.spilled_blocks = spilled_.size();
+  status.blocks_written = blocks_spilled_;
+  status.blocks_paged_in = blocks_paged_in_;
+  std::lock_guard<std::mutex> failure_lock(failure_mutex_);
+  status.failures = store_failures_;
+  status.last_error = last_store_error_;
+  return status;
 }
 
 }  // namespace occupancy_fusion

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <new>
 #include <utility>
+#include <vector>
 
 #include "occupancy_fusion/map/voxel_block.h"
 
@@ -49,6 +50,42 @@ struct BrickLayout {
   // a whole block that hybrid storage adds to a write.)
   static std::uint64_t knownBricks(const VoxelBlock& block);
   static int countBits(std::uint64_t mask) { return __builtin_popcountll(mask); }
+
+  // The bricks of `mask`, in increasing brick order and each in offsetInBrick order, between a
+  // block and a packed array of countBits(mask) * kBrickVolume floats: the layout of a
+  // SparseBlock's bricks and of a block in the spill store (BrickEncoding).
+  static void packBricks(const VoxelBlock& block, std::uint64_t mask, float* bricks) {
+    for (std::uint64_t left = mask; left != 0; left &= left - 1) {
+      const float* first = &block.log_odds[firstVoxelOf(__builtin_ctzll(left))];
+      for (int pair = 0; pair < 4; ++pair, bricks += 2) {
+        std::memcpy(bricks, first + kPairOffsets[pair], 2 * sizeof(float));
+      }
+    }
+  }
+  // Writes the bricks into `block`; its other voxels are left as they are.
+  static void expandBricks(std::uint64_t mask, const float* bricks, VoxelBlock* block) {
+    for (std::uint64_t left = mask; left != 0; left &= left - 1) {
+      float* first = &block->log_odds[firstVoxelOf(__builtin_ctzll(left))];
+      for (int pair = 0; pair < 4; ++pair, bricks += 2) {
+        std::memcpy(first + kPairOffsets[pair], bricks, 2 * sizeof(float));
+      }
+    }
+  }
+};
+
+// A block as bytes, for the spill store (block_store.h): the sparse form without its header, i.e.
+// the 64-bit brick mask (host byte order) followed by the non-empty bricks as packBricks lays
+// them out. A block with every brick non-empty takes 8 + 2048 bytes, a thin surface far less.
+struct BrickEncoding {
+  static std::size_t sizeFor(std::uint64_t mask) {
+    return sizeof(mask) + static_cast<std::size_t>(BrickLayout::countBits(mask)) *
+                              BrickLayout::kBrickVolume * sizeof(float);
+  }
+  // Replaces `out` with the encoding of `block`.
+  static void encode(const VoxelBlock& block, std::vector<unsigned char>* out);
+  // The block of an encoding, its known_count recounted and version 0. False, leaving `out`
+  // unspecified, when the bytes are no encoding (a length that does not match the mask).
+  static bool decode(const void* bytes, std::size_t size, VoxelBlock* out);
 };
 
 // The sparse form: a header followed, in the same allocation, by `capacity` bricks of 8 floats.
@@ -213,13 +250,7 @@ class StoredBlock {
     out->mask = mask;
     out->version = block.version;
     out->known_count = block.known_count;
-    float* brick = out->bricks();
-    for (std::uint64_t left = mask; left != 0; left &= left - 1) {
-      const float* first = &block.log_odds[BrickLayout::firstVoxelOf(__builtin_ctzll(left))];
-      for (int pair = 0; pair < 4; ++pair, brick += 2) {
-        std::memcpy(brick, first + BrickLayout::kPairOffsets[pair], 2 * sizeof(float));
-      }
-    }
+    BrickLayout::packBricks(block, mask, out->bricks());
     return out;
   }
 
@@ -228,13 +259,7 @@ class StoredBlock {
     out->log_odds.fill(VoxelBlock::kUnknown);
     out->known_count = block.known_count;
     out->version = block.version;
-    const float* brick = block.bricks();
-    for (std::uint64_t left = block.mask; left != 0; left &= left - 1) {
-      float* first = &out->log_odds[BrickLayout::firstVoxelOf(__builtin_ctzll(left))];
-      for (int pair = 0; pair < 4; ++pair, brick += 2) {
-        std::memcpy(first + BrickLayout::kPairOffsets[pair], brick, 2 * sizeof(float));
-      }
-    }
+    BrickLayout::expandBricks(block.mask, block.bricks(), out);
   }
 
   std::uintptr_t bits_ = 0;

@@ -7,11 +7,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <shared_mutex>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -33,10 +36,16 @@ enum class BlockStorage {
   kHybrid,  // a block with few non-empty bricks keeps only those: less memory, a little more CPU
 };
 
+class BlockStore;
+
 struct VoxelMapConfig {
   double resolution = 0.05;          // m, edge of a voxel
   OccupancyModel model;              // hit/miss/clamping
   std::size_t max_memory_bytes = 0;  // 0: unbounded. See VoxelMap's memory bound.
+  // With max_memory_bytes: the folder of the store the evicted blocks go to and come back from
+  // (VoxelMap's "Spill store"); empty: evicted blocks are dropped.
+  std::string spill_folder;
+  std::size_t spill_max_bytes = 0;  // the store's size limit on disk; 0: the disk's
   BlockStorage block_storage = BlockStorage::kDense;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
@@ -54,6 +63,17 @@ struct MapChanges {
   bool full_rebuild = false;        // the log no longer reaches back: rebuild from scratch
   std::vector<BlockIndex> changed;  // written since, and still allocated
   std::vector<BlockIndex> removed;  // cleared, evicted or reset since
+};
+
+// The spill store's state, for diagnostics.
+struct SpillStatus {
+  bool enabled = false;  // a memory bound and a spill folder
+  std::string folder;
+  std::size_t spilled_blocks = 0;   // blocks held by the store alone now
+  std::size_t blocks_written = 0;   // blocks written to the store, in all
+  std::size_t blocks_paged_in = 0;  // blocks brought back into memory by writes, in all
+  std::size_t failures = 0;         // store operations that failed (blocks dropped or unreadable)
+  std::string last_error;           // the newest failure, naming the store's folder
 };
 
 struct VoxelCounts {
@@ -82,9 +102,26 @@ struct VoxelCounts {
 // farthest from the focus (the last sensor origin given to setFocus) are dropped, their voxels
 // becoming unknown, until the map uses at most 90 % of the bound. Dropped blocks are counted in
 // evictedBlockCount() and reported as removed by changesSince().
+//
+// Spill store: with a memory bound and a spill_folder, the blocks the bound evicts are written to
+// a BlockStore in that folder instead (in one transaction per eviction) and leave memory, but not
+// the map: every read (point queries, forEach*, copyBlock(s), counts) gives what a map without
+// the bound would give, reading a spilled block from the store (forEach* stream them, one block
+// in memory at a time); a write of a spilled block (updateBlocks, applyUpdates, ...) first brings
+// it back into memory. Reads leave spilled blocks where they are, so they never grow the memory
+// and run under the shared lock as before (the store allows parallel readers). Spilling is
+// not a change: changesSince() does not report spilled blocks. A store operation that fails
+// while mapping (a full disk, spill_max_bytes reached, a damaged entry) never throws out of a
+// write: a block that cannot be spilled is dropped as without a store, one that cannot be read
+// back reads as unknown (and is dropped when written), and spillStatus() counts the failure.
+// The store is emptied when the map is constructed and by reset().
 class VoxelMap {
  public:
-  explicit VoxelMap(const VoxelMapConfig& config);  // validates config
+  // Validates config; with a memory bound and a spill folder, opens (or creates) the store,
+  // throwing std::runtime_error naming the folder when it cannot (unwritable, damaged, written
+  // with another resolution).
+  explicit VoxelMap(const VoxelMapConfig& config);
+  ~VoxelMap();
 
   // With BlockStorage::kHybrid, a written block is stored sparse while it has at most this many
   // non-empty bricks (of BrickLayout::kBrickCount).
@@ -150,10 +187,11 @@ class VoxelMap {
   std::uint64_t version() const;
 
   // Accounting.
-  std::size_t blockCount() const;
+  std::size_t blockCount() const;  // in memory and spilled
   std::size_t knownVoxelCount() const;
-  std::size_t memoryBytes() const;  // blocks, hash table and change log
-  std::size_t evictedBlockCount() const;
+  std::size_t memoryBytes() const;  // blocks, hash table, change log and spilled blocks' index
+  std::size_t evictedBlockCount() const;  // blocks dropped (their voxels unknown again)
+  SpillStatus spillStatus() const;
   struct StorageStats {
     std::size_t dense_blocks = 0;
     std::size_t sparse_blocks = 0;
@@ -161,17 +199,36 @@ class VoxelMap {
     std::size_t block_bytes = 0;    // heap bytes of all blocks (allocated, not only used)
     std::size_t table_bytes = 0;    // the block hash table
     std::size_t change_log_bytes = 0;
+    std::size_t spilled_blocks = 0;     // held by the spill store alone
+    std::size_t spill_index_bytes = 0;  // the in-memory index of the spilled blocks
   };
   StorageStats storageStats() const;
 
  private:
   using BlockTable = SpatialKeyMap<StoredBlock>;  // keyed by packKey(block)
 
-  // Allocates (dense), stamps the version and logs the change; caller holds the unique lock.
+  using BlockFn = std::function<void(const BlockIndex&, const VoxelBlock&)>;
+
+  // Allocates (dense, or paged in from the spill store), stamps the version and logs the change;
+  // caller holds the unique lock.
   StoredBlock& storedForWrite(std::uint64_t key);
   // The same, stored dense until finishWrite() settles it (for per-voxel writes).
   VoxelBlock& blockForWrite(const BlockIndex& block);
   const StoredBlock* findBlock(const BlockIndex& block) const;
+  // A block's contents wherever it is (memory or spill store); nullptr if the map has none.
+  const VoxelBlock* viewBlock(std::uint64_t key, VoxelBlock* scratch) const;
+  // Every block, those in memory first, then the spilled ones streamed from the store.
+  void forEachBlockLocked(const BlockFn& fn) const;
+  void forEachSpilledBlock(const BlockFn& fn) const;
+  bool readSpilled(std::uint64_t key, VoxelBlock* out) const;
+  // A spilled block taken out of the store's index for the caller to insert into blocks_;
+  // nullopt when the block is not spilled or cannot be read (then it is dropped).
+  std::optional<StoredBlock> takeSpilled(std::uint64_t key);
+  void forgetSpilled(std::uint64_t key);
+  void pageInSpilledInRange(const BlockIndex& lo, const BlockIndex& hi);
+  std::vector<std::uint64_t> farthestBlocksOverTarget() const;
+  bool spillToStore(const std::vector<std::uint64_t>& keys);
+  void recordStoreFailure(const std::exception& error) const;
   bool hybrid() const { return config_.block_storage == BlockStorage::kHybrid; }
   void settleWrittenBlocks();
   void markChanged(std::uint64_t key);
@@ -195,6 +252,18 @@ class VoxelMap {
   BlockChangeLog change_log_;
   std::size_t block_bytes_ = 0;               // sum of the blocks' bytes()
   std::vector<std::uint64_t> dense_written_;  // blockForWrite's blocks, settled by finishWrite
+
+  std::unique_ptr<BlockStore> store_;  // the spill store, if configured
+  // Blocks held by the store alone (never also in blocks_), with their known voxel counts; the
+  // store may hold older copies of blocks since paged in, which this index leaves out.
+  SpatialKeyMap<int> spilled_;
+  std::size_t spilled_known_voxels_ = 0;
+  std::size_t blocks_spilled_ = 0;
+  std::size_t blocks_paged_in_ = 0;
+  // Failures can happen in readers (under the shared lock): counted under a lock of their own.
+  mutable std::mutex failure_mutex_;
+  mutable std::size_t store_failures_ = 0;
+  mutable std::string last_store_error_;
 };
 
 }  // namespace occupancy_fusion

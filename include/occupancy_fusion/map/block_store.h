@@ -1,0 +1,83 @@
+// An on-disk store of voxel blocks in a folder, on LMDB (an embedded, memory-mapped B+tree with
+// ACID transactions): where VoxelMap puts the blocks its memory bound evicts, and reads them back
+// from (docs/architecture.md, "Spill store").
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/map/voxel_block.h"
+
+struct MDB_env;  // lmdb.h's, kept out of this header
+
+namespace occupancy_fusion {
+
+struct BlockStoreConfig {
+  std::string folder;        // created if missing; LMDB's data.mdb and lock.mdb go into it
+  double resolution = 0.05;  // m, the map's: recorded in a new store, required of an old one
+  // The store's size limit (LMDB's map size): it starts at initial_bytes and doubles whenever a
+  // write needs more, up to max_bytes (0: no limit but the disk's).
+  std::size_t initial_bytes = std::size_t{64} << 20;
+  std::size_t max_bytes = 0;
+};
+
+// Keys are packed block indices (spatial_key.h's packKey), values the blocks' BrickEncoding.
+// Beside the blocks, a metadata table holds the format version, the block side and the map's
+// resolution. Every failure throws std::runtime_error naming the folder: a folder that cannot be
+// created or written, a store of another resolution, block side or format, a damaged store, a
+// write that does not fit in max_bytes, a folder in use by another store (in this process or
+// another: the store holds an exclusive flock on in_use.lock in its folder while open).
+//
+// Commits are not flushed to disk one by one (MDB_NOSYNC): a process that dies keeps every
+// committed write (they are in the system's page cache), a system crash may lose the newest.
+//
+// Thread safety: reads (get, forEach, size) may run in parallel with each other, a read may be
+// nested in another's callback, but a write (put, clear) must not run alongside any other call
+// (growing the store remaps it): the owner's lock keeps them apart, as VoxelMap's does.
+class BlockStore {
+ public:
+  static constexpr int kFormatVersion = 1;
+
+  explicit BlockStore(const BlockStoreConfig& config);
+  ~BlockStore();
+  BlockStore(const BlockStore&) = delete;
+  BlockStore& operator=(const BlockStore&) = delete;
+
+  const std::string& folder() const { return config_.folder; }
+  double resolution() const { return config_.resolution; }
+
+  // Writes (or replaces) the blocks keys[i], block_at(i), in one transaction: all or nothing.
+  // block_at(i)'s reference need only last until the next call of block_at.
+  using BlockSource = std::function<const VoxelBlock&(std::size_t)>;
+  void put(const std::vector<std::uint64_t>& keys, const BlockSource& block_at);
+  void put(std::uint64_t key, const VoxelBlock& block);
+  // The block of `key` (version 0); false when the store does not hold it.
+  bool get(std::uint64_t key, VoxelBlock* out) const;
+  // Every block, in increasing key order, read in one transaction (a consistent view), decoded
+  // one at a time: memory stays one block whatever the store's size.
+  void forEach(const std::function<void(std::uint64_t, const VoxelBlock&)>& fn) const;
+  // Removes every block; the metadata stays.
+  void clear();
+
+  std::size_t size() const;       // blocks held
+  std::size_t sizeLimit() const;  // the current map size, bytes
+
+ private:
+  void lockFolder();
+  void open();
+  void close();
+  void checkOrWriteMetadata();
+  void grow(std::size_t current);
+  [[noreturn]] void fail(const std::string& what, int code) const;
+
+  BlockStoreConfig config_;
+  int lock_fd_ = -1;  // holds the folder's flock while the store is open
+  MDB_env* env_ = nullptr;
+  unsigned int blocks_dbi_ = 0;
+  unsigned int meta_dbi_ = 0;
+};
+
+}  // namespace occupancy_fusion
