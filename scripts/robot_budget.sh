@@ -1,22 +1,28 @@
 #!/usr/bin/env bash
 # The whole robot's budget in the ROS graph: mapping.launch with the depth, disparity and laser
-# mappers and the MapServer in one manager, fed at native rates by the Simulator in a process of
-# its own (a depth camera 640 x 480 at 30 Hz, a stereo camera's disparity 640 x 480 at 15 Hz,
-# two laser scanners at 40 Hz; stereo matching is the simulator's, so it is counted apart), with
-# projected_map and the markers subscribed. scripts/robot_budget_monitor.py measures, after a
+# mappers and the MapServer in one manager, fed at native rates by a recorded robot played with
+# rosbag (simulate_recording, generated once into the output folder: the room scene, a depth
+# camera 640 x 480 at 30 Hz, a stereo camera's disparity 640 x 480 at 15 Hz with a matcher's
+# patches, two laser scanners at 40 Hz, tf at 120 Hz; stereo matching is not part of it), with
+# projected_map and the markers subscribed. scripts/robot_budget_monitor.py measures after a
 # warm-up: per sensor the frames sent, integrated and dropped, and the latency from each frame's
-# stamp to the first projected_map that holds it (projected_map_stamps); the mapping manager's
-# and the simulator's CPU share of the cores. Writes robot_budget.csv (per 5 s window),
-# robot_budget.txt (the summary) and robot_budget.png (scripts/robot_budget_plot.py).
-# Usage: scripts/robot_budget.sh [seconds measured, default 120] [output folder, default
-#        ./output/robot_budget] [name:=value ...  roslaunch arguments of the generated launch file:
-#        resolution, publish_rate, depth_rate, stereo_rate, laser_rate, depth_width, depth_height,
-#        stereo_width, stereo_height, stereo_input (full, half or quarter)]
+# stamp to the first projected_map that holds it (projected_map_stamps), in the bag's time; the
+# mapping manager's and the player's CPU share of the cores. Writes robot_budget.csv (per 5 s
+# window), robot_budget.txt (the summary) and robot_budget.png (scripts/robot_budget_plot.py).
+# (The Simulator nodelet renders these sensors at about 11 Hz on two cores: too slow to feed
+# them live.)
+# Usage: scripts/robot_budget.sh [seconds measured, default 60] [output folder, default
+#        ./output/robot_budget] [name:=value ...  arguments of the generated launch file:
+#        resolution (default 0.05), publish_rate (the MapServer's, default 20 Hz), stereo_input
+#        (full, half or quarter; default full), worker_threads (the manager's; default one per
+#        core), queue_size (the mappers' input queues, default 5), stereo_method (visibility or
+#        octomap), disparity (false: no DisparityMapper)]
 # BUDGET_BUILD_DIR=<catkin build folder> uses that build as it is (no install, no build step).
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export PATH="/usr/bin:/bin:$PATH"
-duration="${1:-120}"
+duration="${1:-60}"
+warmup=15
 out="$(realpath -m "${2:-$root/output/robot_budget}")"
 shift 2 || shift $#
 if [[ -z "${BUDGET_BUILD_DIR:-}" ]]; then
@@ -24,38 +30,39 @@ if [[ -z "${BUDGET_BUILD_DIR:-}" ]]; then
   "$root/scripts/build.sh"
 fi
 build="$(realpath -m "${BUDGET_BUILD_DIR:-$root/build}")"
+bin="$build/devel/lib/occupancy_fusion"
 mkdir -p "$out"
+
+seconds=$((warmup + duration + 5))
+bag="$out/robot_${seconds}s.bag"
+if [[ ! -f "$bag" ]]; then
+  echo "robot budget: recording $seconds s of the simulated robot into $bag" >&2
+  "$bin/simulate_recording" --output "$bag.tmp" --scene room --frames $((seconds * 120)) \
+    --rate 120 --sensors depth,disparity,scan --every depth=4,disparity=8,scan=3 \
+    --image-size 640x480 --disparity-patches 0.2
+  mv "$bag.tmp" "$bag"
+fi
 
 cat > "$out/robot_budget.launch" << 'EOF'
 <launch>
   <arg name="resolution" default="0.05"/>
   <arg name="publish_rate" default="20.0"/>
-  <arg name="depth_rate" default="30.0"/>
-  <arg name="depth_width" default="640"/>
-  <arg name="depth_height" default="480"/>
-  <arg name="stereo_rate" default="15.0"/>
-  <arg name="stereo_width" default="640"/>
-  <arg name="stereo_height" default="480"/>
   <arg name="stereo_input" default="full"/>
-  <arg name="laser_rate" default="40.0"/>
-
-  <node pkg="occupancy_fusion" type="simulator_node" name="simulator" output="screen">
-    <rosparam file="$(find occupancy_fusion)/config/simulator.yaml" command="load"/>
-    <param name="camera/rate" value="$(arg depth_rate)"/>
-    <param name="camera/width" value="$(arg depth_width)"/>
-    <param name="camera/height" value="$(arg depth_height)"/>
-    <param name="stereo/rate" value="$(arg stereo_rate)"/>
-    <param name="stereo/width" value="$(arg stereo_width)"/>
-    <param name="stereo/height" value="$(arg stereo_height)"/>
-    <param name="front_laser/rate" value="$(arg laser_rate)"/>
-    <param name="rear_laser/rate" value="$(arg laser_rate)"/>
-  </node>
-
+  <arg name="worker_threads" default="0"/>  <!-- 0: the manager's default (one per core) -->
+  <arg name="queue_size" default="5"/>      <!-- the mappers' input queues -->
+  <arg name="stereo_method" default="visibility"/>
+  <arg name="disparity" default="true"/>      <!-- false: no DisparityMapper -->
+  <param name="use_sim_time" value="true"/>
+  <param if="$(eval int(arg('worker_threads')) > 0)" name="occupancy_fusion_manager/num_worker_threads"
+         value="$(arg worker_threads)"/>
   <include file="$(find occupancy_fusion)/launch/mapping.launch">
     <arg name="depth" value="true"/>
-    <arg name="disparity" value="true"/>
+    <arg name="disparity" value="$(arg disparity)"/>
     <arg name="laser" value="true"/>
     <arg name="image" value="camera/depth/image"/>
+    <arg name="front_scan" value="scan_front"/>
+    <arg name="rear_scan" value="scan_rear"/>
+    <arg name="stereo_method" value="$(arg stereo_method)"/>
   </include>
   <param name="map_server/publish_rate" value="$(arg publish_rate)"/>
   <param name="map_server/resolution" value="$(arg resolution)"/>
@@ -63,6 +70,9 @@ cat > "$out/robot_budget.launch" << 'EOF'
   <param name="disparity_mapper/resolution" value="$(arg resolution)"/>
   <param name="laser_mapper/resolution" value="$(arg resolution)"/>
   <param name="disparity_mapper/stereo/input_resolution" value="$(arg stereo_input)"/>
+  <param name="depth_mapper/queue_size" value="$(arg queue_size)"/>
+  <param name="disparity_mapper/queue_size" value="$(arg queue_size)"/>
+  <param name="laser_mapper/queue_size" value="$(arg queue_size)"/>
 </launch>
 EOF
 
@@ -73,6 +83,7 @@ export ROS_MASTER_URI="http://localhost:$port"
 roslaunch -p "$port" "$out/robot_budget.launch" "$@" > "$out/roslaunch.log" 2>&1 &
 launch=$!
 cleanup() {
+  [[ -n "${player:-}" ]] && kill -INT "$player" 2> /dev/null || true
   kill -INT "$launch" 2> /dev/null || true
   wait "$launch" 2> /dev/null || true
 }
@@ -83,13 +94,17 @@ master = rosgraph.Master("/robot_budget")
 while True:
     try:
         master.lookupService("/map_server/save_map")
-        master.lookupNode("/simulator")
         break
     except Exception:  # master not up yet, or not advertised yet
         time.sleep(1)'
-echo "robot budget: measuring for $duration s (after 15 s of warm-up) into $out" >&2
-python3 "$root/scripts/robot_budget_monitor.py" --duration "$duration" --warmup 15 \
-  --topic /camera/depth/image --topic /stereo/disparity --topic /front_laser/scan \
-  --topic /rear_laser/scan --csv "$out/robot_budget.csv" --summary "$out/robot_budget.txt"
+sleep 3  # the mappers' subscriptions and tf listeners, loaded after the map server
+# The clock at 1 kHz: latencies are read in the bag's time.
+rosbag play -q --clock --hz 1000 "$bag" > "$out/rosbag.log" 2>&1 &
+player=$!
+echo "robot budget: measuring for $duration s (after $warmup s of warm-up) into $out" >&2
+python3 "$root/scripts/robot_budget_monitor.py" --duration "$duration" --warmup "$warmup" \
+  --player-pid "$player" --topic /camera/depth/image --topic /stereo/disparity \
+  --topic /scan_front --topic /scan_rear --csv "$out/robot_budget.csv" \
+  --summary "$out/robot_budget.txt"
 python3 "$root/scripts/robot_budget_plot.py" "$out/robot_budget.csv" "$out/robot_budget.png"
 echo "robot budget: $out/robot_budget.txt, $out/robot_budget.csv, $out/robot_budget.png"

@@ -1,19 +1,19 @@
 #!/usr/bin/env python3
 """Measures a running robot-budget graph (scripts/robot_budget.sh): per sensor topic the frames
 sent, integrated and dropped, and the latency from each frame's stamp to the arrival here of the
-first projected_map that holds it (the MapServer's projected_map_stamps lists, per topic, the
-newest stamp integrated before each grid was built); the mapping manager's and the simulator's
-CPU share of the machine's cores.
+first projected_map that holds it (the MapServer's projected_map_stamps lists the frames each
+grid holds that the one before did not); the mapping manager's and the player's CPU share of the
+machine's cores.
 
 Sensor messages are not deserialised: every watched message type starts with its std_msgs/Header,
-whose stamp is read from the raw bytes. Stamps are wall time (no simulated clock), so a latency is
-this node's wall clock at the grid's arrival minus the frame's stamp.
+whose stamp is read from the raw bytes. A latency is this node's ROS clock at the grid's arrival
+(the bag's /clock, published at 1 kHz, under use_sim_time) minus the frame's stamp.
 
 Writes a CSV with one row per window (--window s): per topic the frames sent, the median and the
 99th percentile latency of the frames stamped in it; the processes' CPU share. Prints a summary.
 
 Usage: robot_budget_monitor.py --duration S --warmup S --csv FILE --summary FILE
-       [--manager NAME] [--simulator NAME] [--topic TOPIC]...
+       --player-pid PID [--manager NAME] --topic TOPIC [--topic TOPIC]...
 """
 import argparse
 import bisect
@@ -43,11 +43,31 @@ def node_pid(node_name):
     return int(pid)
 
 
+def descendants(pid):
+    """pid and every process below it (rosbag play runs its player as a child)."""
+    found = [pid]
+    for task in os.listdir("/proc/%d/task" % pid):
+        try:
+            with open("/proc/%d/task/%s/children" % (pid, task)) as children:
+                for child in children.read().split():
+                    found += descendants(int(child))
+        except OSError:  # the task ended meanwhile
+            pass
+    return found
+
+
 def cpu_seconds(pid):
-    """User and system CPU time of a process and its threads (stat(5) fields 14 and 15)."""
-    with open("/proc/%d/stat" % pid) as stat:
-        fields = stat.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    """User and system CPU time of a process, its threads and its children (stat(5) fields 14
+    and 15)."""
+    total = 0.0
+    for process in descendants(pid):
+        try:
+            with open("/proc/%d/stat" % process) as stat:
+                fields = stat.read().rsplit(")", 1)[1].split()
+            total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        except OSError:  # ended meanwhile
+            pass
+    return total
 
 
 def header_stamp(raw):
@@ -87,10 +107,10 @@ class Recorder:
             self.sent[topic].append(stamp)
 
     def on_grid(self, message):
-        arrival = time.time()
-        held = {source: stamp.to_sec() for source, stamp in zip(message.sources, message.stamps)}
+        arrival = rospy.get_rostime().to_sec()
+        listed = [(source, stamp.to_sec()) for source, stamp in zip(message.sources, message.stamps)]
         with self.lock:
-            self.grids.append((arrival, held))
+            self.grids.append((arrival, listed))
 
     def on_diagnostics(self, array):
         with self.lock:
@@ -107,16 +127,16 @@ class Recorder:
 
 
 def latencies(sent, grids, topic):
-    """Per frame stamp: seconds from the stamp to the first grid holding it; None if none did."""
-    # The newest stamp each grid held of `topic`, never going back (see IntegratedStamps).
-    arrivals = [arrival for arrival, _ in grids]
-    held = [h.get(topic, float("-inf")) for _, h in grids]
-    for i in range(1, len(held)):
-        held[i] = max(held[i], held[i - 1])
+    """Per frame stamp: seconds from the stamp to the arrival of the grid that lists it (the first
+    projected_map holding it); None for a frame no grid lists (dropped before integration)."""
+    listed = sorted((stamp, arrival) for arrival, frames in grids
+                    for source, stamp in frames if source == topic)
+    stamps = [stamp for stamp, _ in listed]
     result = {}
     for stamp in sent:
-        index = bisect.bisect_left(held, stamp - STAMP_TOLERANCE_S)
-        result[stamp] = arrivals[index] - stamp if index < len(held) else None
+        index = bisect.bisect_left(stamps, stamp - STAMP_TOLERANCE_S)
+        found = index < len(stamps) and stamps[index] <= stamp + STAMP_TOLERANCE_S
+        result[stamp] = listed[index][1] - stamp if found else None
     return result
 
 
@@ -126,7 +146,7 @@ def main():
     parser.add_argument("--warmup", type=float, default=10.0, help="s before measuring")
     parser.add_argument("--window", type=float, default=5.0, help="s per CSV row")
     parser.add_argument("--manager", default="/occupancy_fusion_manager")
-    parser.add_argument("--simulator", default="/simulator")
+    parser.add_argument("--player-pid", type=int, required=True, help="rosbag play's process")
     parser.add_argument("--topic", action="append", required=True,
                         help="a sensor topic (resolved name); repeat for each")
     parser.add_argument("--csv", required=True)
@@ -135,54 +155,57 @@ def main():
 
     rospy.init_node("robot_budget_monitor", disable_signals=True)
     recorder = Recorder(args.topic)
-    manager_pid, simulator_pid = node_pid(args.manager), node_pid(args.simulator)
+    manager_pid, player_pid = node_pid(args.manager), args.player_pid
     cores = os.cpu_count()
     time.sleep(args.warmup)
     start = time.time()
+    ros_start = rospy.get_rostime().to_sec()
     start_counts = {task: recorder.counts(task) for task in TASKS.values()}
-    cpu_start = {pid: cpu_seconds(pid) for pid in (manager_pid, simulator_pid)}
+    cpu_start = {pid: cpu_seconds(pid) for pid in (manager_pid, player_pid)}
     windows = []
     next_window = start + args.window
     while time.time() < start + args.duration:
         time.sleep(max(0.0, min(next_window, start + args.duration) - time.time()))
         now = time.time()
-        windows.append((now, {pid: cpu_seconds(pid) for pid in (manager_pid, simulator_pid)}))
+        windows.append((now, rospy.get_rostime().to_sec(),
+                        {pid: cpu_seconds(pid) for pid in (manager_pid, player_pid)}))
         next_window += args.window
     end = time.time()
+    ros_end = rospy.get_rostime().to_sec()
     end_counts = {task: recorder.counts(task) for task in TASKS.values()}
     time.sleep(1.0)  # grids holding the last frames of the run
     with recorder.lock:
-        sent = {topic: [s for s in stamps if start <= s < end]
+        sent = {topic: [s for s in stamps if ros_start <= s < ros_end]
                 for topic, stamps in recorder.sent.items()}
         grids = list(recorder.grids)
 
     per_topic = {topic: latencies(stamps, grids, topic) for topic, stamps in sent.items()}
-    columns = ["elapsed_s", "manager_cpu_share", "simulator_cpu_share"]
+    columns = ["elapsed_s", "manager_cpu_share", "player_cpu_share"]
     for topic in args.topic:
         columns += [topic + " frames", topic + " latency_median_ms", topic + " latency_p99_ms"]
     with open(args.csv, "w", newline="") as out:
         writer = csv.DictWriter(out, fieldnames=columns)
         writer.writeheader()
-        previous_time, previous_cpu = start, cpu_start
-        for now, cpu in windows:
+        previous_time, previous_ros, previous_cpu = start, ros_start, cpu_start
+        for now, ros_now, cpu in windows:
             row = {"elapsed_s": "%.1f" % (now - start)}
-            for name, pid in (("manager", manager_pid), ("simulator", simulator_pid)):
+            for name, pid in (("manager", manager_pid), ("player", player_pid)):
                 share = (cpu[pid] - previous_cpu[pid]) / ((now - previous_time) * cores)
                 row[name + "_cpu_share"] = "%.3f" % share
             for topic in args.topic:
                 values = [v for s, v in per_topic[topic].items()
-                          if previous_time <= s < now and v is not None]
+                          if previous_ros <= s < ros_now and v is not None]
                 row[topic + " frames"] = len(values)
                 for key, fraction in (("latency_median_ms", 0.5), ("latency_p99_ms", 0.99)):
                     value = percentile(values, fraction)
                     row[topic + " " + key] = "" if value is None else "%.1f" % (1e3 * value)
             writer.writerow(row)
-            previous_time, previous_cpu = now, cpu
+            previous_time, previous_ros, previous_cpu = now, ros_now, cpu
 
     lines = ["robot budget: %.0f s measured after %.0f s warm-up, %d cores" %
              (end - start, args.warmup, cores)]
-    for name, pid in (("mapping manager", manager_pid), ("simulator", simulator_pid)):
-        share = (windows[-1][1][pid] - cpu_start[pid]) / ((windows[-1][0] - start) * cores)
+    for name, pid in (("mapping manager", manager_pid), ("rosbag play", player_pid)):
+        share = (windows[-1][2][pid] - cpu_start[pid]) / ((windows[-1][0] - start) * cores)
         lines.append("%s CPU: %.1f %% of %d cores" % (name, 100.0 * share, cores))
     all_latencies = []
     for topic in args.topic:
@@ -195,11 +218,14 @@ def main():
                          topic, len(sent[topic]), len(values), never,
                          "-" if median is None else "%.1f" % (1e3 * median),
                          "-" if p99 is None else "%.1f" % (1e3 * p99),
-                         len(sent[topic]) / (end - start)))
+                         len(sent[topic]) / (ros_end - ros_start)))
     for kind, task in TASKS.items():
         before, after = start_counts[task], end_counts[task]
         delta = {key: int(after.get(key, 0)) - int(before.get(key, 0))
                  for key in ("frames received", "frames integrated", "frames dropped")}
+        if not after:
+            lines.append("%s: not running" % task)
+            continue
         dropped = {key: int(after[key]) - int(before.get(key, 0)) for key in after
                    if key.startswith("frames dropped (") and int(after[key]) > int(before.get(key, 0))}
         lines.append("%s: received %d, integrated %d, dropped %d %s; integration ms mean %s, max %s"

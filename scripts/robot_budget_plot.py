@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Draws a robot-budget run's CSV (scripts/robot_budget_monitor.py) over time: per sensor topic
 the median and 99th-percentile latency from a frame's stamp to the first projected_map holding it,
-and the CPU share of the mapping manager and of the simulator.
+and the CPU share of the mapping manager and of rosbag play.
 
 Usage: robot_budget_plot.py ROBOT_BUDGET_CSV OUTPUT_PNG
 """
@@ -39,7 +39,7 @@ def main():
     latency.axhline(150, color="grey", linewidth=0.8, linestyle=":")
     latency.set_ylabel("stamp to projected_map (ms)")
     latency.legend(fontsize=7, ncol=2)
-    for name, colour in (("manager_cpu_share", "C0"), ("simulator_cpu_share", "C3")):
+    for name, colour in (("manager_cpu_share", "C0"), ("player_cpu_share", "C3")):
         x, y = series(rows, name)
         cpu.plot(x, [100 * v for v in y], color=colour, label=name.replace("_cpu_share", ""))
     cpu.axhline(50, color="grey", linewidth=0.8)

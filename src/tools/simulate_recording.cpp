@@ -35,6 +35,9 @@ robot's pose on /tf (map -> odom -> base_link) and the sensor mounts on /tf_stat
   --sensors LIST  comma-separated sensor kinds (default: cloud,depth,disparity,scan)
   --disparity-patches P  chance in [0, 1] of a patch of wrong disparity in each 24 x 24 px cell,
                   persisting over 10 frames, as a real matcher's correlated errors (default 0)
+  --image-size WxH  the depth and stereo cameras' images (default 160x120; same field of view)
+  --every LIST    per sensor kind, every how many frames it writes, e.g. depth=4,disparity=8,scan=3
+                  with --rate 120: depth 30 Hz, disparity 15 Hz, scans 40 Hz (default: every frame)
   --help          this text
 Exit status: 0 done, 2 bad arguments, 1 failure while writing.
 )";
@@ -59,16 +62,39 @@ std::vector<std::unique_ptr<SimulatedSensor>> parseSensors(const CommandLine& li
   if (kinds.empty()) throw UsageError("--sensors: give at least one sensor kind");
   SimulatedSensorOptions options;
   options.disparity_patch_probability = line.doubleValue("disparity-patches", 0.0);
+  const std::string size = line.value("image-size", "");
+  if (!size.empty()) {
+    char separator = 0;
+    std::istringstream parsed(size);
+    if (!(parsed >> options.image_width >> separator >> options.image_height) || separator != 'x' ||
+        !parsed.eof() || options.image_width < 1 || options.image_height < 1) {
+      throw UsageError("--image-size must be WIDTHxHEIGHT in pixels, e.g. 640x480, not '" + size +
+                       "'");
+    }
+  }
+  for (const std::string& entry : line.listValue("every", "")) {
+    const std::size_t equals = entry.find('=');
+    int every = 0;
+    try {
+      every = equals == std::string::npos ? 0 : std::stoi(entry.substr(equals + 1));
+    } catch (const std::exception&) {
+    }
+    if (every < 1) throw UsageError("--every: '" + entry + "' is not KIND=N with N >= 1");
+    options.every[entry.substr(0, equals)] = every;
+  }
   try {
     return makeSimulatedSensors(kinds, options);
   } catch (const std::invalid_argument& error) {
-    throw UsageError(std::string("--sensors / --disparity-patches: ") + error.what());
+    throw UsageError(std::string("--sensors / --disparity-patches / --image-size / --every: ") +
+                     error.what());
   }
 }
 
 int run(int argc, char** argv) {
   const CommandLine line(
-      argc, argv, {"output", "scene", "frames", "rate", "sensors", "disparity-patches"}, {"help"});
+      argc, argv,
+      {"output", "scene", "frames", "rate", "sensors", "disparity-patches", "image-size", "every"},
+      {"help"});
   const SimulatedRecordingConfig config = parseConfig(line);
   const std::string output = line.required("output");
   const std::vector<std::unique_ptr<SimulatedSensor>> sensors = parseSensors(line);

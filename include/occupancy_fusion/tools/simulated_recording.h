@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,14 @@ class SimulatedSensor {
   // `stamp` (the number drives noise that persists over frames).
   virtual void writeFrame(const sim::Scene& scene, const Eigen::Isometry3d& T_map_base, int frame,
                           const ros::Time& stamp, rosbag::Bag* bag) const = 0;
+
+  // Writes at every n-th frame of the recording only (its own frame k is the recording's k n):
+  // sensors at rates below the recording's.
+  int every() const { return every_; }
+  void setEvery(int every);  // throws std::invalid_argument unless every >= 1
+
+ private:
+  int every_ = 1;
 };
 
 // A depth camera publishing sensor_msgs/PointCloud2 in its optical frame (z forward, x right,
@@ -167,6 +176,11 @@ std::vector<LaserScannerConfig> twoLaserScanners();
 std::vector<std::string> simulatedSensorKinds();
 struct SimulatedSensorOptions {
   double disparity_patch_probability = 0.0;  // correlated disparity patches (0: none)
+  // The depth and stereo cameras' images (px; 0: 160 x 120), the focal lengths scaled alike (the
+  // same field of view) and the principal point at the centre.
+  int image_width = 0, image_height = 0;
+  // Per sensor kind, every how many frames of the recording it writes (absent: every frame).
+  std::map<std::string, int> every;
 };
 // The sensors of the given kinds (each name once at most; "scan" gives both scanners). Throws
 // std::invalid_argument naming an unknown kind.
@@ -187,8 +201,9 @@ struct SimulatedRecordingConfig {
 };
 
 // Writes the recording to bag_path (overwritten): /tf_static once (every sensor's mount) at
-// frame 0's stamp, then per frame /tf (map -> odom, odom -> base_link) and each sensor's
-// messages, all stamped alike. Returns the number of frames written.
+// frame 0's stamp, then per frame /tf (map -> odom, odom -> base_link) and the messages of each
+// sensor due at it (SimulatedSensor::every), all stamped alike. Returns the number of frames
+// written.
 int writeSimulatedRecording(const SimulatedRecordingConfig& config,
                             const std::vector<std::unique_ptr<SimulatedSensor>>& sensors,
                             const std::string& bag_path);

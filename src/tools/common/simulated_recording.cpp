@@ -249,21 +249,53 @@ std::vector<LaserScannerConfig> twoLaserScanners() {
 
 std::vector<std::string> simulatedSensorKinds() { return {"cloud", "depth", "disparity", "scan"}; }
 
+void SimulatedSensor::setEvery(int every) {
+  if (every < 1) throw std::invalid_argument("a sensor writes every n-th frame, n >= 1");
+  every_ = every;
+}
+
+namespace {
+
+// The camera with images of width x height (0: unchanged) and the same field of view.
+sim::PinholeCamera resized(const sim::PinholeCamera& camera, int width, int height) {
+  if (width == 0 && height == 0) return camera;
+  if (width < 1 || height < 1) throw std::invalid_argument("image size must be at least 1 x 1");
+  sim::PinholeCamera result = camera;
+  result.fx = camera.fx * width / camera.width;
+  result.fy = camera.fy * height / camera.height;
+  result.cx = (width - 1) / 2.0;
+  result.cy = (height - 1) / 2.0;
+  result.width = width;
+  result.height = height;
+  return result;
+}
+
+}  // namespace
+
 std::vector<std::unique_ptr<SimulatedSensor>> makeSimulatedSensors(
     const std::vector<std::string>& kinds, const SimulatedSensorOptions& options) {
   std::vector<std::unique_ptr<SimulatedSensor>> sensors;
   std::vector<std::string> seen;
+  for (const auto& [kind, every] : options.every) {
+    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) {
+      throw std::invalid_argument("a rate for sensor kind '" + kind + "', which is not recorded");
+    }
+  }
   for (const std::string& kind : kinds) {
     if (std::find(seen.begin(), seen.end(), kind) != seen.end()) {
       throw std::invalid_argument("sensor kind '" + kind + "' given twice");
     }
     seen.push_back(kind);
+    const std::size_t first = sensors.size();
     if (kind == "cloud") {
       sensors.push_back(std::make_unique<PointCloudCameraSensor>(PointCloudCameraConfig()));
     } else if (kind == "depth") {
-      sensors.push_back(std::make_unique<DepthImageCameraSensor>(DepthImageCameraConfig()));
+      DepthImageCameraConfig config;
+      config.camera = resized(config.camera, options.image_width, options.image_height);
+      sensors.push_back(std::make_unique<DepthImageCameraSensor>(config));
     } else if (kind == "disparity") {
       DisparityCameraConfig config;
+      config.camera = resized(config.camera, options.image_width, options.image_height);
       config.noise.patch_probability = options.disparity_patch_probability;
       sensors.push_back(std::make_unique<DisparityCameraSensor>(config));
     } else if (kind == "scan") {
@@ -273,6 +305,10 @@ std::vector<std::unique_ptr<SimulatedSensor>> makeSimulatedSensors(
     } else {
       throw std::invalid_argument("unknown sensor kind '" + kind +
                                   "' (known: cloud, depth, disparity, scan)");
+    }
+    const auto every = options.every.find(kind);
+    for (std::size_t i = first; every != options.every.end() && i < sensors.size(); ++i) {
+      sensors[i]->setEvery(every->second);
     }
   }
   return sensors;
@@ -313,7 +349,8 @@ int writeSimulatedRecording(const SimulatedRecordingConfig& config,
         transformMessage(config.T_map_odom.inverse() * T_map_base, "odom", "base_link", stamp));
     bag.write("/tf", stamp, poses);
     for (const std::unique_ptr<SimulatedSensor>& sensor : sensors) {
-      sensor->writeFrame(world.scene, T_map_base, frame, stamp, &bag);
+      if (frame % sensor->every() != 0) continue;
+      sensor->writeFrame(world.scene, T_map_base, frame / sensor->every(), stamp, &bag);
     }
   }
   bag.close();

@@ -4,11 +4,16 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <ros/time.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
 #include "occupancy_fusion/ros/conversions.h"
@@ -16,6 +21,8 @@
 #include "occupancy_fusion/tools/ros_conversions.h"
 #include "occupancy_fusion/tools/rosbag_reader.h"
 #include "occupancy_fusion/tools/simulated_recording.h"
+
+#include "../../common/test_folder.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -169,6 +176,53 @@ TEST(SimulatedWorld, KnowsItsScenesAndRejectsOthers) {
   }
   EXPECT_THROW(makeSimulatedWorld("attic", 5), std::invalid_argument);
   EXPECT_THROW(makeSimulatedWorld("room", 0), std::invalid_argument);
+}
+
+// Sensors at rates below the recording's (--every) and camera images of another size
+// (--image-size): per topic the messages of every n-th frame, stamped n frames apart, and the
+// cameras' intrinsics scaled to the same field of view.
+TEST(SimulatedRecording, WritesEachSensorAtItsOwnRateAndSize) {
+  const TemporaryFolder temporary;
+  const std::string path = (temporary.path() / "rates.bag").string();
+  SimulatedSensorOptions options;
+  options.image_width = 64;
+  options.image_height = 48;
+  options.every = {{"depth", 4}, {"disparity", 8}, {"scan", 3}};
+  SimulatedRecordingConfig config;
+  config.frames = 24;
+  config.rate_hz = 120.0;
+  writeSimulatedRecording(config, makeSimulatedSensors({"depth", "disparity", "scan"}, options),
+                          path);
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::map<std::string, std::vector<double>> stamps;
+  for (const rosbag::MessageInstance& message : rosbag::View(bag)) {
+    stamps[message.getTopic()].push_back(message.getTime().toSec());
+    if (const auto image = message.instantiate<sensor_msgs::Image>()) {
+      EXPECT_EQ(image->width, 64u);
+      EXPECT_EQ(image->height, 48u);
+    }
+    if (const auto info = message.instantiate<sensor_msgs::CameraInfo>()) {
+      EXPECT_NEAR(info->K[0], 138.6 * 64 / 160, 1e-9);  // fx of 160 px, scaled
+      EXPECT_NEAR(info->K[2], 31.5, 1e-9);              // cx at the centre
+    }
+  }
+  const std::map<std::string, std::pair<std::size_t, int>> expected = {
+      {"/camera/depth/image", {6, 4}},
+      {"/stereo/disparity", {3, 8}},
+      {"/scan_front", {8, 3}},
+      {"/scan_rear", {8, 3}},
+      {"/tf", {24, 1}}};
+  for (const auto& [topic, count_and_every] : expected) {
+    const auto& [count, every] = count_and_every;
+    ASSERT_EQ(stamps[topic].size(), count) << topic;
+    for (std::size_t i = 1; i < count; ++i) {
+      EXPECT_NEAR(stamps[topic][i] - stamps[topic][i - 1], every / 120.0, 1e-6) << topic;
+    }
+  }
+  options.every = {{"cloud", 2}};  // not recorded
+  EXPECT_THROW(makeSimulatedSensors({"depth"}, options), std::invalid_argument);
+  options.every = {{"depth", 0}};
+  EXPECT_THROW(makeSimulatedSensors({"depth"}, options), std::invalid_argument);
 }
 
 }  // namespace
