@@ -47,8 +47,14 @@ VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
     store.folder = config_.spill_folder;
     store.resolution = config_.resolution;
     store.max_bytes = config_.spill_max_bytes;
-    store_ = std::make_unique<BlockStore>(store);
-    store_->clear();  // the map starts empty: blocks of an earlier run would read as this map's
+    try {
+      store_ = std::make_unique<BlockStore>(store);
+      store_->clear();  // the map starts empty: blocks of an earlier run would read as this map's
+    } catch (const std::exception& error) {
+      // Mapping goes on in memory with the bound's eviction; spillStatus() says why.
+      store_.reset();
+      recordStoreFailure(error);
+    }
   }
 }
 
@@ -618,7 +624,7 @@ SpillStatus VoxelMap::spillStatus() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   SpillStatus status;
   status.enabled = store_ != nullptr;
-  if (status.enabled) status.folder = config_.spill_folder;
+  if (config_.max_memory_bytes > 0) status.folder = config_.spill_folder;
   status.spilled_blocks = spilled_.size();
   status.blocks_written = blocks_spilled_;
   status.blocks_paged_in = blocks_paged_in_;

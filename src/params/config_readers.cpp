@@ -45,6 +45,14 @@ VoxelMapConfig readVoxelMapConfig(const ParameterSource& source) {
   source.get("resolution", &config.resolution);
   config.model = readOccupancyModel(source);
   config.max_memory_bytes = readMemoryBound(source);
+  source.get("spill_folder", &config.spill_folder);
+  double spill_max_mb = 0.0;
+  source.get("spill_max_mb", &spill_max_mb);
+  if (!(spill_max_mb >= 0.0) || !std::isfinite(spill_max_mb)) {
+    throw std::invalid_argument("spill_max_mb must be >= 0 (0: as much as the disk holds), got " +
+                                std::to_string(spill_max_mb));
+  }
+  config.spill_max_bytes = static_cast<std::size_t>(spill_max_mb * kBytesPerMebibyte);
   config.block_storage = readBlockStorage(source);
   config.validate();
   return config;

@@ -336,7 +336,15 @@ void MapPublisher::publishBinary(const ros::Time& stamp) {
 void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const PublishTimings& t = timings_;
   const VoxelMap& voxels = map_->voxels();
-  status.summary(diagnostic_msgs::DiagnosticStatus::OK, "publishing");
+  const SpillStatus spill = voxels.spillStatus();
+  if (spill.failures > 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   (spill.enabled ? "spill store failed (blocks dropped or unreadable): "
+                                  : "no spill store, evicted blocks are dropped: ") +
+                       spill.last_error);
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "publishing");
+  }
   status.add("publish cycles", t.cycles);
   status.add("cache ms", t.cache_ms);
   status.add("cache blocks refreshed", t.cache_blocks_refreshed);
@@ -351,6 +359,14 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
   status.add("known voxels", voxels.knownVoxelCount());
   status.add("memory bytes", voxels.memoryBytes());
   status.add("evicted blocks", voxels.evictedBlockCount());
+  if (!spill.folder.empty()) {
+    status.add("spill folder", spill.folder);
+    status.add("spill store open", spill.enabled);
+    status.add("spilled blocks", spill.spilled_blocks);
+    status.add("blocks written to the spill store", spill.blocks_written);
+    status.add("blocks paged in", spill.blocks_paged_in);
+    status.add("spill store failures", spill.failures);
+  }
   status.add("layer cells", map_->layer().knownCellCount());
   status.add("longest lock hold (ms)", lock_statistics_.longestHoldMs());
   status.add("longest lock hold (call)", lock_statistics_.longestHoldCall());

@@ -67,8 +67,8 @@ struct MapChanges {
 
 // The spill store's state, for diagnostics.
 struct SpillStatus {
-  bool enabled = false;  // a memory bound and a spill folder
-  std::string folder;
+  bool enabled = false;  // a memory bound and a spill folder whose store opened
+  std::string folder;    // the spill folder under a memory bound, whether or not it opened
   std::size_t spilled_blocks = 0;   // blocks held by the store alone now
   std::size_t blocks_written = 0;   // blocks written to the store, in all
   std::size_t blocks_paged_in = 0;  // blocks brought back into memory by writes, in all
@@ -117,9 +117,10 @@ struct VoxelCounts {
 // The store is emptied when the map is constructed and by reset().
 class VoxelMap {
  public:
-  // Validates config; with a memory bound and a spill folder, opens (or creates) the store,
-  // throwing std::runtime_error naming the folder when it cannot (unwritable, damaged, written
-  // with another resolution).
+  // Validates config; with a memory bound and a spill folder, opens (or creates) the store. When
+  // it cannot (unwritable, damaged, in use, written with another resolution) the map works
+  // without it, evicting as without a folder, and spillStatus() gives the reason naming the
+  // folder (enabled false, one failure).
   explicit VoxelMap(const VoxelMapConfig& config);
   ~VoxelMap();
 

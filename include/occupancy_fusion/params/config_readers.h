@@ -17,7 +17,9 @@ namespace occupancy_fusion {
 // occupancy_threshold (probability above which a voxel or cell is occupied).
 OccupancyModel readOccupancyModel(const ParameterSource& source);
 
-// resolution (m), the occupancy model above, max_memory_mb (MiB, 0 = unbounded).
+// resolution (m), the occupancy model above, max_memory_mb (MiB, 0 = unbounded), spill_folder
+// (the store the bound's evicted blocks go to; empty: they are dropped), spill_max_mb (MiB, the
+// store's limit on disk; 0 = the disk's).
 VoxelMapConfig readVoxelMapConfig(const ParameterSource& source);
 
 // occupancy_min_z, occupancy_max_z (m, map frame; the height band projected into the 2D grid,

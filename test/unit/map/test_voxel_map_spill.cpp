@@ -387,30 +387,37 @@ TEST_F(VoxelMapSpill, ResetForgetsSpilledBlocks) {
   EXPECT_EQ(blocks, 1u);
 }
 
-TEST_F(VoxelMapSpill, BadStoresAreRefusedNamingTheFolder) {
+TEST_F(VoxelMapSpill, BadStoresAreRefusedNamingTheFolderAndTheMapEvictsInstead) {
   const std::string folder = path("spill");
-  auto expectError = [](const VoxelMapConfig& config, const std::string& words) {
-    try {
-      VoxelMap map(config);
-      ADD_FAILURE() << "no error for " << config.spill_folder;
-    } catch (const std::runtime_error& error) {
-      const std::string message = error.what();
-      EXPECT_NE(message.find(config.spill_folder), std::string::npos) << message;
-      EXPECT_NE(message.find(words), std::string::npos) << message;
+  // The store refused: the map says why, naming the folder, and goes on with the bound's
+  // eviction (blocks beyond it dropped, counted).
+  auto expectRefused = [](const VoxelMapConfig& config, const std::string& words) {
+    VoxelMap map(config);
+    const SpillStatus status = map.spillStatus();
+    EXPECT_FALSE(status.enabled);
+    EXPECT_EQ(status.folder, config.spill_folder);
+    EXPECT_EQ(status.failures, 1u);
+    EXPECT_NE(status.last_error.find(config.spill_folder), std::string::npos) << status.last_error;
+    EXPECT_NE(status.last_error.find(words), std::string::npos) << status.last_error;
+    for (int x = 0; x < 200; ++x) {
+      map.setFocus(Eigen::Vector3d(x * 0.8, 0.0, 0.0));
+      map.updateVoxel(map.indexOf(Eigen::Vector3d(x * 0.8, 0.0, 0.0)), 1.0f);
     }
+    EXPECT_GT(map.evictedBlockCount(), 0u);
+    EXPECT_EQ(map.spillStatus().spilled_blocks, 0u);
   };
   { VoxelMap map(boundedConfig(BlockStorage::kDense, folder)); }  // resolution 0.1
   VoxelMapConfig other_resolution = boundedConfig(BlockStorage::kDense, folder);
   other_resolution.resolution = 0.05;
-  expectError(other_resolution, "resolution 0.1 m");
+  expectRefused(other_resolution, "resolution 0.1 m");
 
   std::ofstream(path("file")) << "not a folder";
-  expectError(boundedConfig(BlockStorage::kDense, path("file") + "/spill"), "cannot create");
+  expectRefused(boundedConfig(BlockStorage::kDense, path("file") + "/spill"), "cannot create");
 
   const std::string damaged = path("damaged");
   std::filesystem::create_directories(damaged);
   std::ofstream(damaged + "/data.mdb") << std::string(20000, 'x');
-  expectError(boundedConfig(BlockStorage::kDense, damaged), "damaged");
+  expectRefused(boundedConfig(BlockStorage::kDense, damaged), "damaged");
 
   // Without a memory bound nothing is spilled, and no store is made.
   VoxelMapConfig unbounded = boundedConfig(BlockStorage::kDense, path("unused"));

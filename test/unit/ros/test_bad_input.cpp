@@ -14,9 +14,9 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
-#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
@@ -429,6 +429,9 @@ TEST(BadParameters, AreRejectedNamingTheParameter) {
       {{{"sensor_model/hit", 1.5}}, "sensor_model/hit"},
       {{{"sensor_model/miss", 0.0}}, "sensor_model/miss"},
       {{{"sensor_model/max", 1.0}}, "sensor_model/max"},
+      {{{"spill_max_mb", -1.0}}, "spill_max_mb"},
+      {{{"spill_max_mb", std::nan("")}}, "spill_max_mb"},
+      {{{"max_memory_mb", -2.0}}, "max_memory_mb"},
   };
   for (const auto& [values, name] : cases) {
     const std::string why = messageOf<std::invalid_argument>([&] {
@@ -438,6 +441,25 @@ TEST(BadParameters, AreRejectedNamingTheParameter) {
     EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
   }
   EXPECT_NO_THROW(readVoxelMapConfig(DoubleParameters({{"resolution", 0.1}})));
+}
+
+// The spill store's parameters reach the map's config, in bytes.
+TEST(MapParameters, SpillFolderAndLimitReachTheMap) {
+  class SpillParameters : public DoubleParameters {
+   public:
+    SpillParameters() : DoubleParameters({{"max_memory_mb", 64.0}, {"spill_max_mb", 2.5}}) {}
+    using DoubleParameters::get;
+    bool get(const std::string& key, std::string* value) const override {
+      if (key != "spill_folder") return false;
+      *value = "/maps/spill";
+      return true;
+    }
+  };
+  const VoxelMapConfig config = readVoxelMapConfig(SpillParameters());
+  EXPECT_EQ(config.spill_folder, "/maps/spill");
+  EXPECT_EQ(config.spill_max_bytes, std::size_t{5} * 1024 * 1024 / 2);
+  EXPECT_EQ(config.max_memory_bytes, std::size_t{64} * 1024 * 1024);
+  EXPECT_TRUE(readVoxelMapConfig(DoubleParameters({})).spill_folder.empty());
 }
 
 }  // namespace
