@@ -77,27 +77,8 @@ cat > "$out/robot_budget.launch" << 'EOF'
 EOF
 
 source "$build/devel/setup.bash"
-export ROS_HOSTNAME=localhost
-port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')"
-export ROS_MASTER_URI="http://localhost:$port"
-roslaunch -p "$port" "$out/robot_budget.launch" "$@" > "$out/roslaunch.log" 2>&1 &
-launch=$!
-cleanup() {
-  [[ -n "${player:-}" ]] && kill -INT "$player" 2> /dev/null || true
-  kill -INT "$launch" 2> /dev/null || true
-  wait "$launch" 2> /dev/null || true
-}
-trap cleanup EXIT
-timeout 120 python3 -c '
-import time, rosgraph
-master = rosgraph.Master("/robot_budget")
-while True:
-    try:
-        master.lookupService("/map_server/save_map")
-        break
-    except Exception:  # master not up yet, or not advertised yet
-        time.sleep(1)'
-sleep 3  # the mappers' subscriptions and tf listeners, loaded after the map server
+source "$root/scripts/mapping_graph.sh"
+start_mapping_graph "$out/robot_budget.launch" "$out/roslaunch.log" "$@"
 # The clock at 1 kHz: latencies are read in the bag's time.
 rosbag play -q --clock --hz 1000 "$bag" > "$out/rosbag.log" 2>&1 &
 player=$!

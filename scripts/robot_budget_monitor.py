@@ -22,52 +22,14 @@ import os
 import struct
 import threading
 import time
-import xmlrpc.client
 
-import rosgraph
 import rospy
-from diagnostic_msgs.msg import DiagnosticArray
+from graph_probe import Diagnostics, cpu_seconds, node_pid
 from occupancy_fusion.msg import IntegratedStamps
 
 # The mappers' diagnostics task of each sensor topic's frames.
 TASKS = {"depth": "depth mapping", "disparity": "disparity mapping", "scan": "laser mapping"}
 STAMP_TOLERANCE_S = 1e-6  # the mappers keep stamps as double seconds
-
-
-def node_pid(node_name):
-    """The pid of a running ROS node, asked from the node itself (XML-RPC getPid)."""
-    uri = rosgraph.Master("/robot_budget_monitor").lookupNode(node_name)
-    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/robot_budget_monitor")
-    if code != 1:
-        raise RuntimeError("getPid failed for " + node_name)
-    return int(pid)
-
-
-def descendants(pid):
-    """pid and every process below it (rosbag play runs its player as a child)."""
-    found = [pid]
-    for task in os.listdir("/proc/%d/task" % pid):
-        try:
-            with open("/proc/%d/task/%s/children" % (pid, task)) as children:
-                for child in children.read().split():
-                    found += descendants(int(child))
-        except OSError:  # the task ended meanwhile
-            pass
-    return found
-
-
-def cpu_seconds(pid):
-    """User and system CPU time of a process, its threads and its children (stat(5) fields 14
-    and 15)."""
-    total = 0.0
-    for process in descendants(pid):
-        try:
-            with open("/proc/%d/stat" % process) as stat:
-                fields = stat.read().rsplit(")", 1)[1].split()
-            total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-        except OSError:  # ended meanwhile
-            pass
-    return total
 
 
 def header_stamp(raw):
@@ -91,7 +53,7 @@ class Recorder:
         self.lock = threading.Lock()
         self.sent = {topic: [] for topic in topics}
         self.grids = []  # (wall arrival, {topic: newest stamp held})
-        self.diagnostics = {}
+        self.diagnostics = Diagnostics()
         for topic in topics:
             rospy.Subscriber(topic, rospy.AnyMsg, self.on_frame, callback_args=topic,
                              queue_size=200)
@@ -99,7 +61,6 @@ class Recorder:
         # The outputs a planner and rviz read, watched so that the MapServer builds them.
         self.outputs = [rospy.Subscriber(topic, rospy.AnyMsg, lambda _: None, queue_size=1)
                         for topic in ("projected_map", "occupied_cells_vis_array")]
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=20)
 
     def on_frame(self, message, topic):
         stamp = header_stamp(message._buff)
@@ -112,18 +73,8 @@ class Recorder:
         with self.lock:
             self.grids.append((arrival, listed))
 
-    def on_diagnostics(self, array):
-        with self.lock:
-            for status in array.status:
-                if status.values:
-                    self.diagnostics[status.name] = {kv.key: kv.value for kv in status.values}
-
     def counts(self, task):
-        with self.lock:
-            for name, values in self.diagnostics.items():
-                if name.endswith(task):
-                    return dict(values)
-        return {}
+        return self.diagnostics.task(task)
 
 
 def latencies(sent, grids, topic):
@@ -155,7 +106,7 @@ def main():
 
     rospy.init_node("robot_budget_monitor", disable_signals=True)
     recorder = Recorder(args.topic)
-    manager_pid, player_pid = node_pid(args.manager), args.player_pid
+    manager_pid, player_pid = node_pid(args.manager, "/robot_budget_monitor"), args.player_pid
     cores = os.cpu_count()
     time.sleep(args.warmup)
     start = time.time()

@@ -47,28 +47,8 @@ cat > "$out/soak.launch" << 'EOF'
 EOF
 
 source "$build/devel/setup.bash"
-export ROS_HOSTNAME=localhost
-port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')"
-export ROS_MASTER_URI="http://localhost:$port"
-roslaunch -p "$port" "$out/soak.launch" > "$out/roslaunch.log" 2>&1 &
-launch=$!
-cleanup() {
-  [[ -n "${player:-}" ]] && kill -INT "$player" 2> /dev/null || true
-  kill -INT "$launch" 2> /dev/null || true
-  wait "$launch" 2> /dev/null || true
-}
-trap cleanup EXIT
-# The manager and its nodelets up (the map server's diagnostics show), then the bag.
-timeout 120 python3 -c '
-import time, rosgraph
-master = rosgraph.Master("/soak")
-while True:
-    try:
-        master.lookupService("/map_server/save_map")
-        break
-    except Exception:  # master not up yet, or service not advertised yet
-        time.sleep(1)'
-sleep 3  # the mappers' subscriptions and tf listeners, loaded after the map server
+source "$root/scripts/mapping_graph.sh"
+start_mapping_graph "$out/soak.launch" "$out/roslaunch.log"
 rosbag play -q -l --clock "$out/demo.bag" > "$out/rosbag.log" 2>&1 &
 player=$!
 python3 "$root/scripts/soak_monitor.py" --duration "$duration" --csv "$out/soak.csv" \

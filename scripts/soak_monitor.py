@@ -15,26 +15,14 @@ import csv
 import os
 import sys
 import time
-import xmlrpc.client
 
-import rosgraph
 import rospy
-from diagnostic_msgs.msg import DiagnosticArray
+from graph_probe import Diagnostics, cpu_seconds, node_pid
 from occupancy_fusion.srv import SaveMap
 
 MAPPERS = ("depth_mapper", "disparity_mapper", "laser_mapper", "point_cloud_mapper")
 WATCHED_TOPICS = ("projected_map", "occupied_cells_vis_array", "octomap_point_cloud_centers",
                   "octomap_binary")
-
-
-def node_pid(node_name):
-    """The pid of a running ROS node, asked from the node itself (XML-RPC getPid)."""
-    master = rosgraph.Master("/soak_monitor")
-    uri = master.lookupNode(node_name)
-    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/soak_monitor")
-    if code != 1:
-        raise RuntimeError("getPid failed for " + node_name)
-    return int(pid)
 
 
 def resident_mb(pid):
@@ -43,32 +31,6 @@ def resident_mb(pid):
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) / 1024.0
     raise RuntimeError("no VmRSS for pid %d" % pid)
-
-
-def cpu_seconds(pid):
-    with open("/proc/%d/stat" % pid) as stat:
-        fields = stat.read().rsplit(")", 1)[1].split()
-    # utime and stime are fields 14 and 15 of stat(5); fields[0] here is field 3.
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-class Diagnostics:
-    """The newest key/value pairs of every diagnostic status, by status name."""
-
-    def __init__(self):
-        self.latest = {}
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_array, queue_size=10)
-
-    def on_array(self, array):
-        for status in array.status:
-            self.latest[status.name] = {kv.key: kv.value for kv in status.values}
-
-    def find(self, node, key):
-        """The status of `node` (status names start with the nodelet's name) having `key`."""
-        for name, values in list(self.latest.items()):
-            if name.lstrip("/").startswith(node + ":") and key in values:
-                return values
-        return None
 
 
 def save_map(service, prefix):
@@ -99,7 +61,7 @@ def main():
     diagnostics = Diagnostics()
     watchers = [rospy.Subscriber(topic, rospy.AnyMsg, lambda _: None, queue_size=1)
                 for topic in WATCHED_TOPICS]
-    pid = node_pid(args.manager)
+    pid = node_pid(args.manager, "/soak_monitor")
     rospy.wait_for_service("/map_server/save_map", 60)
     save_service = rospy.ServiceProxy("/map_server/save_map", SaveMap)
 

@@ -175,15 +175,15 @@ inline std::size_t countIn(const DiagnosticValues& values, const std::string& ke
 class MapObserver {
  public:
   explicit MapObserver(ros::NodeHandle& node_handle) : node_handle_(node_handle) {
-    subscribers_.push_back(node_handle_.subscribe<diagnostic_msgs::DiagnosticArray>(
+    diagnostics_subscriber_ = node_handle_.subscribe<diagnostic_msgs::DiagnosticArray>(
         "/diagnostics", 50,
-        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) { onArray(*array); }));
-    topics_.emplace_back();  // the diagnostics' subscriber is no watch()
+        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) { onArray(*array); });
   }
   // The spinner's threads may be inside a callback while the test suite tears down: shut the
   // subscriptions down first (shutdown() waits for a running callback).
   ~MapObserver() {
-    for (ros::Subscriber& subscriber : subscribers_) subscriber.shutdown();
+    diagnostics_subscriber_.shutdown();
+    for (auto& [topic, subscriber] : watched_) subscriber.shutdown();
   }
   MapObserver(const MapObserver&) = delete;
   MapObserver& operator=(const MapObserver&) = delete;
@@ -212,23 +212,16 @@ class MapObserver {
           if (also) also(message);
         });
     std::lock_guard<std::mutex> lock(mutex_);
-    subscribers_.push_back(subscriber);
-    topics_.emplace_back(topic);
+    watched_.emplace(topic, subscriber);
   }
   // Stops watching `topic` and forgets what came on it: a later watch() starts afresh.
   void unwatch(const std::string& topic) {
     std::vector<ros::Subscriber> stopped;
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      for (std::size_t i = 0; i < topics_.size();) {
-        if (topics_[i] == topic) {
-          stopped.push_back(subscribers_[i]);
-          subscribers_.erase(subscribers_.begin() + i);
-          topics_.erase(topics_.begin() + i);
-        } else {
-          ++i;
-        }
-      }
+      const auto [first, last] = watched_.equal_range(topic);
+      for (auto it = first; it != last; ++it) stopped.push_back(it->second);
+      watched_.erase(first, last);
     }
     // Outside the lock: shutdown() waits for a running callback, which takes it.
     for (ros::Subscriber& subscriber : stopped) subscriber.shutdown();
@@ -330,8 +323,8 @@ class MapObserver {
 
   ros::NodeHandle node_handle_;
   mutable std::mutex mutex_;
-  std::vector<ros::Subscriber> subscribers_;  // the diagnostics', then one per watch()
-  std::vector<std::string> topics_;           // per subscriber; "" for the diagnostics
+  ros::Subscriber diagnostics_subscriber_;
+  std::multimap<std::string, ros::Subscriber> watched_;  // by topic, one per watch()
   std::map<std::string, Latest> latest_;
   std::map<std::string, DiagnosticValues> diagnostics_;
   std::map<std::string, ros::WallTime> diagnostics_arrivals_;
