@@ -266,7 +266,7 @@ const std::vector<Workload>& workloads() {
        "      [--repetitions K] [--jitter M] [--jitter_deg D] [--sigma S] [--block_size B]\n"
        "      [--threads T] [--clock cpu|wall] [--unknown_neighbour_occupancy P] [--rtabmap DIR]\n"
        "      [--parameter_set measured|table_i|fast_expansion] [--bundle_rays true|false]\n"
-       "      [--method visibility|octomap]\n"
+       "      [--method visibility|octomap] [--measured_grid_fraction F]\n"
        "      [--picture PREFIX [--picture_scene S] [--picture_resolution R]]\n"
        "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
        "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
@@ -291,7 +291,8 @@ const std::vector<Workload>& workloads() {
         "unknown_neighbour_occupancy",
         "parameter_set",
         "bundle_rays",
-        "method"},
+        "method",
+        "measured_grid_fraction"},
        runDisparity},
       {"disparity-artifacts",
        "[--part all|artifacts|fig5a|sweep|matrix] [--frames N] [--resolution R] [--fig5a_updates "
@@ -330,6 +331,7 @@ const std::vector<Workload>& workloads() {
         "measured_window",
         "measured_step_px",
         "measured_grid_px",
+        "measured_grid_fraction",
         "measured_sigma_max_voxels",
         "measured_fuse_known",
         "measured_prior",

@@ -129,12 +129,15 @@ StereoParameterSet g_parameter_set = StereoParameterSet::kMeasured;
 // defaults.
 bool g_bundle_rays = VisibilityStereoConfig().bundle_rays;
 StereoIntegrationMethod g_method = VisibilityStereoConfig().method;
+// --measured_grid_fraction (MeasuredSurfaceConfig::grid_footprint_fraction).
+double g_grid_fraction = MeasuredSurfaceConfig().grid_footprint_fraction;
 
 VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
   VisibilityStereoConfig config = visibilityStereoConfigFor(g_parameter_set);
   config.unknown_neighbour_occupancy = g_unknown_neighbour_occupancy;
   config.bundle_rays = g_bundle_rays;
   config.method = g_method;
+  config.measured_surface.grid_footprint_fraction = g_grid_fraction;
   config.disparity.disparity_sigma_px = sigma_px;
   config.disparity.input_resolution = input;
   return config;
@@ -694,6 +697,7 @@ int runDisparity(const CommandLine& args) {
   options.jitter_deg = args.doubleValue("jitter_deg", 0.0);
   options.sigma_px = args.doubleValue("sigma", 0.5);
   g_parameter_set = stereoParameterSetFromString(args.value("parameter_set", "measured"));
+  g_grid_fraction = args.doubleValue("measured_grid_fraction", g_grid_fraction);
   g_unknown_neighbour_occupancy =
       args.doubleValue("unknown_neighbour_occupancy", g_unknown_neighbour_occupancy);
   const std::string bundle = args.value("bundle_rays", g_bundle_rays ? "true" : "false");

@@ -57,6 +57,7 @@ VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source)
   readEnum(source, "unknown_neighbours", unknownNeighboursFromString, &config.unknown_neighbours);
   read(source, "measured_window_px", &config.measured_surface.window_px);
   read(source, "measured_step_px", &config.measured_surface.step_px);
+  read(source, "measured_grid_fraction", &config.measured_surface.grid_footprint_fraction);
   read(source, "inside_stop_probability", &config.inside_stop_probability);
   read(source, "max_range", &config.max_range);
   read(source, "bundle_rays", &config.bundle_rays);

@@ -40,6 +40,9 @@ void MeasuredSurfaceConfig::validate() const {
   if (!(min_valid > 0 && min_valid <= 1)) {
     throw std::invalid_argument("MeasuredSurfaceConfig.min_valid must be in (0, 1]");
   }
+  if (!(grid_footprint_fraction >= 0 && grid_footprint_fraction <= 1)) {
+    throw std::invalid_argument("MeasuredSurfaceConfig.grid_footprint_fraction must be in [0, 1]");
+  }
 }
 
 namespace {
@@ -102,9 +105,32 @@ LocalPairs localPairs(const DisparityImageView& image, int u, int v, int reach, 
 
 }  // namespace
 
+int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const StereoCamera& camera,
+                                 const MeasuredSurfaceConfig& config,
+                                 const SurfaceGridScale& scale) {
+  if (!(config.grid_footprint_fraction > 0 && scale.voxel_size_m > 0)) return config.grid_step_px;
+  // The smallest disparity the rays use, on the wide windows' sample lattice: the farthest depth,
+  // where a voxel's image is smallest: f r / z = r d / b px for z = f b / d.
+  float smallest = std::numeric_limits<float>::infinity();
+  const int sample = config.sample_step_px;
+  for (int v = 0; v < disparity.height; v += sample) {
+    for (int u = 0; u < disparity.width; u += sample) {
+      const float d = disparity.at(u, v);
+      if (isValidDisparity(d) && d >= scale.min_disparity_px) smallest = std::min(smallest, d);
+    }
+  }
+  if (!std::isfinite(smallest)) return config.grid_step_px;
+  const double focal_baseline = camera.fx * camera.baseline;
+  if (scale.max_range_m > 0) smallest = std::max<float>(smallest, focal_baseline / scale.max_range_m);
+  const double footprint_px = scale.voxel_size_m * smallest / camera.baseline;
+  const int widest = config.window_px / sample * sample;
+  const int step = static_cast<int>(config.grid_footprint_fraction * footprint_px / sample) * sample;
+  return std::max(config.grid_step_px, std::min(widest, step));
+}
+
 MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
                                  const Eigen::Isometry3d& T_map_camera,
-                                 const MeasuredSurfaceConfig& config)
+                                 const MeasuredSurfaceConfig& config, const SurfaceGridScale& scale)
     : T_camera_map_(T_map_camera.inverse()),
       fx_(camera.fx),
       fy_(camera.fy),
@@ -112,10 +138,10 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
       cy_(camera.cy),
       focal_baseline_(camera.fx * camera.baseline),
       width_(disparity.width),
-      height_(disparity.height),
-      step_(config.grid_step_px) {
+      height_(disparity.height) {
   config.validate();
   disparity.validate();
+  step_ = gridStepFor(disparity, camera, config, scale);
   columns_ = (width_ - 1) / step_ + 1;
   rows_ = (height_ - 1) / step_ + 1;
   cells_.assign(static_cast<std::size_t>(columns_) * rows_, kNoSurface);

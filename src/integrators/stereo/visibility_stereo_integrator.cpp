@@ -646,9 +646,10 @@ void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& 
   if (dropped_uncertain != nullptr) *dropped_uncertain = camera_points.dropped_uncertain;
 }
 
-MeasuredSurface VisibilityStereoIntegrator::measuredSurface(
-    const DisparityImageView& disparity, const StereoCamera& camera,
-    const Eigen::Isometry3d& T_map_camera) const {
+MeasuredSurface VisibilityStereoIntegrator::measuredSurface(const DisparityImageView& disparity,
+                                                            const StereoCamera& camera,
+                                                            const Eigen::Isometry3d& T_map_camera,
+                                                            double voxel_size_m) const {
   if (config_.unknown_neighbours != UnknownNeighbours::kMeasured ||
       config_.method != StereoIntegrationMethod::kVisibility) {
     return {};
@@ -656,7 +657,17 @@ MeasuredSurface VisibilityStereoIntegrator::measuredSurface(
   // The grid stays at grid_step_px when the rays are cast from every 2nd or 4th pixel: on an
   // 8 px grid at half input the corridor matrix's 0.05 m cells lost 0.05 of coverage and had 1.2x
   // the false-occupied voxels (docs/disparity_method.md, "Moving camera").
-  return MeasuredSurface(disparity, camera, T_map_camera, config_.measured_surface);
+  const DisparityConversionConfig& conversion = config_.disparity;
+  SurfaceGridScale scale;
+  scale.voxel_size_m = voxel_size_m;
+  // disparityToPoints drops d < sigma_d / max_depth_sigma_ratio (sigma_z / z = sigma_d / d).
+  scale.min_disparity_px = conversion.min_disparity_px;
+  if (conversion.max_depth_sigma_ratio > 0) {
+    scale.min_disparity_px = std::max(
+        scale.min_disparity_px, conversion.disparity_sigma_px / conversion.max_depth_sigma_ratio);
+  }
+  scale.max_range_m = config_.max_range;
+  return MeasuredSurface(disparity, camera, T_map_camera, config_.measured_surface, scale);
 }
 
 StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImageView& disparity,
@@ -679,7 +690,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
 #pragma omp task default(shared)
     disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr,
                          &dropped_uncertain);
-    surface = measuredSurface(disparity, camera, T_map_camera);
+    surface = measuredSurface(disparity, camera, T_map_camera, map->resolution());
 #pragma omp taskwait
   }
   StereoIntegrationStats stats =

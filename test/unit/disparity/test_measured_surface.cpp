@@ -225,6 +225,62 @@ TEST(MeasuredSurface, ReadsTheBorderPixelJustOutsideTheImageWithinTheReach) {
   EXPECT_TRUE(surface.depthAt(pointAt(-7.0, 60.0, 1.0), &z, &z_surface, 0.1));
 }
 
+TEST(MeasuredSurface, GridFollowsTheSmallestVoxelImage) {
+  // A voxel of size r at depth z = f b / d is r d / b px wide, whatever f.
+  std::vector<float> image(static_cast<std::size_t>(kWidth) * kHeight, 12.0f);
+  image[5 * kWidth + 7] = 3.0f;
+  const DisparityImageView view{kWidth, kHeight, image.data(), 0};
+  MeasuredSurfaceConfig config;
+  auto step = [&](double fraction, double voxel, double min_disparity, double max_range) {
+    config.grid_footprint_fraction = fraction;
+    SurfaceGridScale scale;
+    scale.voxel_size_m = voxel;
+    scale.min_disparity_px = min_disparity;
+    scale.max_range_m = max_range;
+    return MeasuredSurface::gridStepFor(view, kCamera, config, scale);
+  };
+  // The pixel at d = 3 is off the 4 px sample lattice that the rule reads, so the smallest
+  // disparity is 12 px: 0.2 m there is 20 px.
+  EXPECT_EQ(step(1.0, 0.2, 0.0, -1.0), 20);
+  EXPECT_EQ(step(0.5, 0.2, 0.0, -1.0), 8);   // 10 px, down to a multiple of the 4 px samples
+  EXPECT_EQ(step(0.25, 0.2, 0.0, -1.0), 4);  // 5 px
+  EXPECT_EQ(step(1.0, 1.0, 0.0, -1.0), 24);  // 100 px: at most the 25 px window
+  EXPECT_EQ(step(1.0, 0.02, 0.0, -1.0), 4);  // 2 px: never finer than grid_step_px
+  EXPECT_EQ(step(0.0, 0.2, 0.0, -1.0), 4);   // fraction 0: the fixed grid
+  EXPECT_EQ(step(1.0, 0.0, 0.0, -1.0), 4);   // no voxel size: the fixed grid
+  // A farther pixel on the lattice: 0.2 m at d = 3 px is 5 px.
+  image[8 * kWidth + 12] = 3.0f;
+  EXPECT_EQ(step(1.0, 0.2, 0.0, -1.0), 4);
+  // ... unless the rays drop it (below min_disparity), or end nearer than its depth: the rays
+  // reach 2.5 m at most, where 0.2 m is f b / 2.5 * 0.2 / b = 10 px.
+  EXPECT_EQ(step(1.0, 0.2, 5.0, -1.0), 20);
+  EXPECT_EQ(step(1.0, 0.2, 0.0, 2.5), 8);
+  // An image without a valid disparity keeps the fixed grid.
+  std::vector<float> empty(image.size(), std::numeric_limits<float>::quiet_NaN());
+  const DisparityImageView nothing{kWidth, kHeight, empty.data(), 0};
+  config.grid_footprint_fraction = 1.0;
+  EXPECT_EQ(MeasuredSurface::gridStepFor(nothing, kCamera, config, {0.2, 0.0, -1.0}), 4);
+}
+
+TEST(MeasuredSurface, ReadsAPlaneAlikeOnACoarseGrid) {
+  // A plane is linear in disparity: a 16 px grid reads it as the 4 px grid does.
+  const Plane plane;
+  const std::vector<float> image = planeImage(plane);
+  const DisparityImageView view{kWidth, kHeight, image.data(), 0};
+  MeasuredSurfaceConfig config;
+  config.grid_footprint_fraction = 1.0;
+  SurfaceGridScale scale;
+  scale.voxel_size_m = 2.0;  // over 30 px at the plane's far side: the widest grid
+  const MeasuredSurface coarse(view, kCamera, Eigen::Isometry3d::Identity(), config, scale);
+  ASSERT_EQ(coarse.gridStep(), 24);
+  for (double v : {13.3, 59.5, 101.7}) {
+    for (double u : {7.2, 79.5, 120.9}) {
+      EXPECT_NEAR(surfaceDepth(coarse, u, v), plane.depth(u, v), 1e-4 * plane.depth(u, v))
+          << "pixel " << u << ", " << v;
+    }
+  }
+}
+
 TEST(MeasuredSurface, RejectsBadConfigurations) {
   const std::vector<float> image = planeImage(Plane());
   const DisparityImageView view{kWidth, kHeight, image.data(), 0};
@@ -242,6 +298,8 @@ TEST(MeasuredSurface, RejectsBadConfigurations) {
   rejects([](MeasuredSurfaceConfig& c) { c.grid_step_px = 6; });  // not a multiple of 4
   rejects([](MeasuredSurfaceConfig& c) { c.step_px = -0.1; });
   rejects([](MeasuredSurfaceConfig& c) { c.window_px = 128; });  // 33^2 samples
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_footprint_fraction = -0.1; });
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_footprint_fraction = std::nan(""); });
   MeasuredSurfaceConfig widest;
   widest.window_px = 127;  // 31^2 samples: the widest median
   EXPECT_NO_THROW(MeasuredSurface(view, kCamera, Eigen::Isometry3d::Identity(), widest));

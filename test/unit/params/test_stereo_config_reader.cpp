@@ -192,6 +192,7 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
                                           "unknown_neighbours",
                                           "measured_window_px",
                                           "measured_step_px",
+                                          "measured_grid_fraction",
                                           "inside_stop_probability",
                                           "max_range",
                                           "bundle_rays",
@@ -216,6 +217,8 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
   const VisibilityStereoConfig defaults;  // Table I
   EXPECT_EQ(from_file.unknown_neighbours, UnknownNeighbours::kMeasured);
   EXPECT_EQ(from_file.measured_surface.window_px, MeasuredSurfaceConfig().window_px);
+  EXPECT_DOUBLE_EQ(from_file.measured_surface.grid_footprint_fraction,
+                   MeasuredSurfaceConfig().grid_footprint_fraction);
   EXPECT_EQ(from_file.method, defaults.method);
   EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_occupied, defaults.prob_hit_visible_occupied);
   EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_free, defaults.prob_hit_visible_free);

@@ -30,7 +30,16 @@ struct MeasuredSurfaceConfig {
   int window_px = 25;
   // px between the grid's surfaces, whatever the input resolution of the rays: a coarser grid
   // interpolates across more of an object's outline (docs/disparity_method.md, "Moving camera").
+  // The finest grid; see grid_footprint_fraction.
   int grid_step_px = 4;
+  // With a voxel size given: the grid may be coarser, up to this fraction of the image size of a
+  // voxel at the frame's farthest measured depth (the smallest any voxel a ray reaches appears),
+  // rounded down to a multiple of sample_step_px and at most window_px. A voxel reads the surface
+  // at its centre's projection, so a grid much finer than a voxel's image adds work and no
+  // detail: a close-range camera with coarse voxels (Middlebury's 2-5 m at 0.2 m: 41 px a voxel,
+  // an 8 px grid) needs a quarter of the grid points. At 0.5, grids of 20 px lost up to 0.03 of
+  // the surface there (docs/disparity_method.md). 0: always grid_step_px.
+  double grid_footprint_fraction = 0.25;
   // px between the wide window's samples (7 x 7 of a 25 px window); grid_step_px must be a
   // multiple of it, so that every grid surface samples one lattice of pixels, read once per frame.
   int sample_step_px = 4;
@@ -54,12 +63,25 @@ struct MeasuredSurfaceConfig {
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
+// What the grid's step may follow (MeasuredSurfaceConfig::grid_footprint_fraction): the map's
+// voxel size and the smallest disparity whose point the rays use (those below are dropped).
+struct SurfaceGridScale {
+  double voxel_size_m = 0.0;      // 0: the grid stays at grid_step_px
+  double min_disparity_px = 0.0;  // smaller disparities are not measured depths of this frame
+  double max_range_m = -1.0;      // rays end here (< 0: no limit): no voxel lies farther
+};
+
 class MeasuredSurface {
  public:
   MeasuredSurface() = default;  // measures nothing: depthAt() is always false
   // disparity (px) of the left camera whose optical frame has pose T_map_camera.
   MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
-                  const Eigen::Isometry3d& T_map_camera, const MeasuredSurfaceConfig& config = {});
+                  const Eigen::Isometry3d& T_map_camera, const MeasuredSurfaceConfig& config = {},
+                  const SurfaceGridScale& scale = {});
+  // px between grid nodes for a frame: grid_step_px, or coarser for `scale` (see
+  // grid_footprint_fraction).
+  static int gridStepFor(const DisparityImageView& disparity, const StereoCamera& camera,
+                         const MeasuredSurfaceConfig& config, const SurfaceGridScale& scale);
 
   bool empty() const { return cells_.empty(); }
   // For a point in the map frame: its depth z along the optical axis and the depth of the
@@ -71,6 +93,7 @@ class MeasuredSurface {
   bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
                double reach_m = 0.0) const;
   double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
+  int gridStep() const { return step_; }                     // px between grid nodes
 
  private:
   std::size_t linear(int i, int j) const { return static_cast<std::size_t>(j) * columns_ + i; }

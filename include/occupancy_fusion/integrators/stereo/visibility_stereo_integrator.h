@@ -124,9 +124,11 @@ class VisibilityStereoIntegrator {
                             std::vector<Eigen::Vector3f>* points_in_map,
                             std::vector<float>* range_sigmas, std::size_t* pixels_read,
                             std::size_t* dropped_uncertain = nullptr) const;
-  // The frame's measured surface when unknown_neighbours is kMeasured, else an empty one.
+  // The frame's measured surface when unknown_neighbours is kMeasured, else an empty one; its grid
+  // follows voxel_size_m (MeasuredSurfaceConfig::grid_footprint_fraction), 0: the finest grid.
   MeasuredSurface measuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
-                                  const Eigen::Isometry3d& T_map_camera) const;
+                                  const Eigen::Isometry3d& T_map_camera,
+                                  double voxel_size_m = 0.0) const;
 
  private:
   VisibilityStereoConfig config_;
