@@ -275,8 +275,8 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
       args.doubleValue("measured_step_px", config.measured_surface.step_px);
   config.measured_surface.grid_step_px =
       args.intValue("measured_grid_px", config.measured_surface.grid_step_px);
-  config.measured_surface.grid_footprint_fraction = args.doubleValue(
-      "measured_grid_fraction", config.measured_surface.grid_footprint_fraction);
+  config.measured_surface.grid_footprint_fraction =
+      args.doubleValue("measured_grid_fraction", config.measured_surface.grid_footprint_fraction);
   config.measured_sigma_max_voxels =
       args.doubleValue("measured_sigma_max_voxels", config.measured_sigma_max_voxels);
   for (const auto& [option, field] :

@@ -121,10 +121,12 @@ int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const Ster
   }
   if (!std::isfinite(smallest)) return config.grid_step_px;
   const double focal_baseline = camera.fx * camera.baseline;
-  if (scale.max_range_m > 0) smallest = std::max<float>(smallest, focal_baseline / scale.max_range_m);
+  if (scale.max_range_m > 0)
+    smallest = std::max<float>(smallest, focal_baseline / scale.max_range_m);
   const double footprint_px = scale.voxel_size_m * smallest / camera.baseline;
   const int widest = config.window_px / sample * sample;
-  const int step = static_cast<int>(config.grid_footprint_fraction * footprint_px / sample) * sample;
+  const int step =
+      static_cast<int>(config.grid_footprint_fraction * footprint_px / sample) * sample;
   return std::max(config.grid_step_px, std::min(widest, step));
 }
 

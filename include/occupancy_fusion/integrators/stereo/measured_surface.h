@@ -93,7 +93,7 @@ class MeasuredSurface {
   bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
                double reach_m = 0.0) const;
   double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
-  int gridStep() const { return step_; }                     // px between grid nodes
+  int gridStep() const { return step_; }                    // px between grid nodes
 
  private:
   std::size_t linear(int i, int j) const { return static_cast<std::size_t>(j) * columns_ + i; }
