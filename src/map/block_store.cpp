@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <system_error>
@@ -21,8 +22,11 @@
 namespace occupancy_fusion {
 namespace {
 
-constexpr char kBlocksTable[] = "blocks";
+constexpr char kBlocksTable[] = "blocks";  // spilled since the last checkpoint
+constexpr char kCheckpointTable[] = "checkpoint";
 constexpr char kMetaTable[] = "meta";
+constexpr char kCheckpointCountKey[] = "checkpoint_count";
+constexpr char kCheckpointStampKey[] = "checkpoint_stamp";
 constexpr char kFormatKey[] = "format_version";
 constexpr char kBlockSideKey[] = "block_side";
 constexpr char kResolutionKey[] = "resolution";
@@ -43,7 +47,9 @@ struct KeyBytes {
   unsigned char bytes[8];
 };
 
+// The value views the text: `text` must outlive it (a C string literal, or a string kept alive).
 MDB_val textValue(const std::string& text) { return {text.size(), const_cast<char*>(text.data())}; }
+MDB_val textValue(const char* text) { return {std::strlen(text), const_cast<char*>(text)}; }
 
 // The shortest decimal that reads back as exactly `resolution` (for the metadata and messages).
 std::string formatResolution(double resolution) {
@@ -159,7 +165,7 @@ void BlockStore::open() {
   if (code != MDB_SUCCESS) fail("cannot create an LMDB environment", code);
   std::size_t initial = config_.initial_bytes;
   if (config_.max_bytes != 0 && initial > config_.max_bytes) initial = config_.max_bytes;
-  code = mdb_env_set_maxdbs(env_, 2);
+  code = mdb_env_set_maxdbs(env_, 3);
   if (code == MDB_SUCCESS) code = mdb_env_set_mapsize(env_, initial);
   // MDB_NOTLS: a read transaction is not tied to its thread, so reads can nest (a forEach
   // callback reading a voxel).
@@ -179,6 +185,9 @@ void BlockStore::checkOrWriteMetadata() {
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot write to the store", txn.beginCode());
   int code = mdb_dbi_open(txn.get(), kMetaTable, MDB_CREATE, &meta_dbi_);
   if (code == MDB_SUCCESS) code = mdb_dbi_open(txn.get(), kBlocksTable, MDB_CREATE, &blocks_dbi_);
+  if (code == MDB_SUCCESS) {
+    code = mdb_dbi_open(txn.get(), kCheckpointTable, MDB_CREATE, &checkpoint_dbi_);
+  }
   if (code != MDB_SUCCESS)
     fail("not a block store, or a damaged one: its tables do not open", code);
   const std::optional<std::string> format = readText(txn.get(), meta_dbi_, kFormatKey);
@@ -186,9 +195,10 @@ void BlockStore::checkOrWriteMetadata() {
   const std::optional<std::string> resolution = readText(txn.get(), meta_dbi_, kResolutionKey);
   const std::string expected_resolution = formatResolution(config_.resolution);
   if (!format && !side && !resolution) {
-    MDB_stat stat;
-    mdb_stat(txn.get(), blocks_dbi_, &stat);
-    if (stat.ms_entries != 0) {
+    MDB_stat spilled, checkpointed;
+    mdb_stat(txn.get(), blocks_dbi_, &spilled);
+    mdb_stat(txn.get(), checkpoint_dbi_, &checkpointed);
+    if (spilled.ms_entries != 0 || checkpointed.ms_entries != 0) {
       throw std::runtime_error("block store '" + config_.folder +
                                "': holds blocks but no metadata (damaged)");
     }
@@ -234,6 +244,7 @@ void BlockStore::grow(std::size_t current) {
   }
   std::size_t next = current * 2;
   if (config_.max_bytes != 0 && next > config_.max_bytes) next = config_.max_bytes;
+  std::unique_lock<std::shared_mutex> lock(remap_mutex_);  // not while sync() flushes the map
   const int code = mdb_env_set_mapsize(env_, next);
   if (code != MDB_SUCCESS) fail("cannot grow to " + std::to_string(next) + " bytes", code);
 }
@@ -273,7 +284,8 @@ bool BlockStore::get(std::uint64_t key, VoxelBlock* out) const {
   KeyBytes key_bytes(key);
   MDB_val name = key_bytes.value();
   MDB_val value;
-  const int code = mdb_get(txn.get(), blocks_dbi_, &name, &value);
+  int code = mdb_get(txn.get(), blocks_dbi_, &name, &value);
+  if (code == MDB_NOTFOUND) code = mdb_get(txn.get(), checkpoint_dbi_, &name, &value);
   if (code == MDB_NOTFOUND) return false;
   if (code != MDB_SUCCESS) fail("cannot read block " + std::to_string(key), code);
   if (!BrickEncoding::decode(value.mv_data, value.mv_size, out)) {
@@ -284,41 +296,167 @@ bool BlockStore::get(std::uint64_t key, VoxelBlock* out) const {
   return true;
 }
 
+void BlockStore::walk(MDB_txn* txn, const EntryFn& fn) const {
+  // The spill table and the checkpoint table, both in key order, merged; a key in both is the
+  // spilled block (newer than its checkpoint).
+  Cursor spilled(txn, blocks_dbi_), checkpointed(txn, checkpoint_dbi_);
+  if (spilled.openCode() != MDB_SUCCESS) fail("cannot read", spilled.openCode());
+  if (checkpointed.openCode() != MDB_SUCCESS) fail("cannot read", checkpointed.openCode());
+  MDB_val spilled_key, spilled_value, checkpoint_key, checkpoint_value;
+  int spilled_code = mdb_cursor_get(spilled.get(), &spilled_key, &spilled_value, MDB_FIRST);
+  int checkpoint_code =
+      mdb_cursor_get(checkpointed.get(), &checkpoint_key, &checkpoint_value, MDB_FIRST);
+  auto keyOf = [&](const MDB_val& name) {
+    const std::uint64_t key = KeyBytes::decode(name);
+    if (name.mv_size != sizeof(key)) {
+      throw std::runtime_error("block store '" + config_.folder + "': entry " +
+                               std::to_string(key) + " is damaged");
+    }
+    return key;
+  };
+  while (spilled_code == MDB_SUCCESS || checkpoint_code == MDB_SUCCESS) {
+    const bool has_spilled = spilled_code == MDB_SUCCESS;
+    const bool has_checkpoint = checkpoint_code == MDB_SUCCESS;
+    const std::uint64_t next_spilled = has_spilled ? keyOf(spilled_key) : 0;
+    const std::uint64_t next_checkpoint = has_checkpoint ? keyOf(checkpoint_key) : 0;
+    if (has_spilled && (!has_checkpoint || next_spilled <= next_checkpoint)) {
+      fn(next_spilled, spilled_value);
+      if (has_checkpoint && next_checkpoint == next_spilled) {
+        checkpoint_code =
+            mdb_cursor_get(checkpointed.get(), &checkpoint_key, &checkpoint_value, MDB_NEXT);
+      }
+      spilled_code = mdb_cursor_get(spilled.get(), &spilled_key, &spilled_value, MDB_NEXT);
+    } else {
+      fn(next_checkpoint, checkpoint_value);
+      checkpoint_code =
+          mdb_cursor_get(checkpointed.get(), &checkpoint_key, &checkpoint_value, MDB_NEXT);
+    }
+  }
+  if (spilled_code != MDB_NOTFOUND) fail("cannot read", spilled_code);
+  if (checkpoint_code != MDB_NOTFOUND) fail("cannot read", checkpoint_code);
+}
+
 void BlockStore::forEach(const std::function<void(std::uint64_t, const VoxelBlock&)>& fn) const {
   Transaction txn(env_, MDB_RDONLY);
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot read", txn.beginCode());
-  Cursor cursor(txn.get(), blocks_dbi_);
-  if (cursor.openCode() != MDB_SUCCESS) fail("cannot read", cursor.openCode());
   VoxelBlock block;
-  MDB_val name, value;
-  int code = mdb_cursor_get(cursor.get(), &name, &value, MDB_FIRST);
-  for (; code == MDB_SUCCESS; code = mdb_cursor_get(cursor.get(), &name, &value, MDB_NEXT)) {
-    const std::uint64_t key = KeyBytes::decode(name);
-    if (name.mv_size != sizeof(key) ||
-        !BrickEncoding::decode(value.mv_data, value.mv_size, &block)) {
+  walk(txn.get(), [&](std::uint64_t key, const MDB_val& value) {
+    if (!BrickEncoding::decode(value.mv_data, value.mv_size, &block)) {
       throw std::runtime_error("block store '" + config_.folder + "': entry " +
                                std::to_string(key) + " is damaged");
     }
     fn(key, block);
-  }
-  if (code != MDB_NOTFOUND) fail("cannot read", code);
+  });
 }
 
-void BlockStore::clear() {
+void BlockStore::clear() { drop(true); }
+
+void BlockStore::clearSpilled() { drop(false); }
+
+void BlockStore::drop(bool checkpoint_too) {
   Transaction txn(env_, 0);
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot write", txn.beginCode());
   int code = mdb_drop(txn.get(), blocks_dbi_, 0);
+  if (code == MDB_SUCCESS && checkpoint_too) code = mdb_drop(txn.get(), checkpoint_dbi_, 0);
+  if (code == MDB_SUCCESS && checkpoint_too) {
+    for (const char* key : {kCheckpointCountKey, kCheckpointStampKey}) {
+      MDB_val name = textValue(key);
+      code = mdb_del(txn.get(), meta_dbi_, &name, nullptr);
+      if (code == MDB_NOTFOUND) code = MDB_SUCCESS;
+      if (code != MDB_SUCCESS) break;
+    }
+  }
   if (code == MDB_SUCCESS) code = txn.commit();
   if (code != MDB_SUCCESS) fail("cannot remove the blocks", code);
+}
+
+int BlockStore::writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& keys,
+                                const BlockSource& block_at,
+                                const std::vector<std::uint64_t>& removed,
+                                const CheckpointInfo& info) {
+  // 1. The blocks spilled since the last checkpoint join it (spilled blocks are the map's newest).
+  int code = MDB_SUCCESS;
+  {
+    Cursor spilled(txn, blocks_dbi_);
+    if (spilled.openCode() != MDB_SUCCESS) return spilled.openCode();
+    MDB_val name, value;
+    code = mdb_cursor_get(spilled.get(), &name, &value, MDB_FIRST);
+    for (; code == MDB_SUCCESS; code = mdb_cursor_get(spilled.get(), &name, &value, MDB_NEXT)) {
+      code = mdb_put(txn, checkpoint_dbi_, &name, &value, 0);
+      if (code != MDB_SUCCESS) return code;
+    }
+    if (code != MDB_NOTFOUND) return code;
+  }
+  code = mdb_drop(txn, blocks_dbi_, 0);
+  // 2. The blocks in memory written since, over them.
+  std::vector<unsigned char> encoded;
+  for (std::size_t i = 0; i < keys.size() && code == MDB_SUCCESS; ++i) {
+    BrickEncoding::encode(block_at(i), &encoded);
+    KeyBytes key(keys[i]);
+    MDB_val name = key.value();
+    MDB_val value{encoded.size(), encoded.data()};
+    code = mdb_put(txn, checkpoint_dbi_, &name, &value, 0);
+  }
+  // 3. The blocks the map lost since.
+  for (std::size_t i = 0; i < removed.size() && code == MDB_SUCCESS; ++i) {
+    KeyBytes key(removed[i]);
+    MDB_val name = key.value();
+    code = mdb_del(txn, checkpoint_dbi_, &name, nullptr);
+    if (code == MDB_NOTFOUND) code = MDB_SUCCESS;
+  }
+  const std::pair<const char*, std::string> entries[] = {
+      {kCheckpointCountKey, std::to_string(info.count)}, {kCheckpointStampKey, info.stamp}};
+  for (const auto& [key, text] : entries) {
+    if (code != MDB_SUCCESS) break;
+    MDB_val name = textValue(key);
+    MDB_val value = textValue(text);
+    code = mdb_put(txn, meta_dbi_, &name, &value, 0);
+  }
+  return code;
+}
+
+void BlockStore::checkpoint(const std::vector<std::uint64_t>& keys, const BlockSource& block_at,
+                            const std::vector<std::uint64_t>& removed, const CheckpointInfo& info) {
+  for (;;) {
+    const std::size_t limit = sizeLimit();
+    Transaction txn(env_, 0);
+    if (txn.beginCode() != MDB_SUCCESS) fail("cannot write", txn.beginCode());
+    int code = writeCheckpoint(txn.get(), keys, block_at, removed, info);
+    if (code == MDB_SUCCESS) code = txn.commit();
+    if (code == MDB_MAP_FULL) {
+      txn.abort();
+      grow(limit);
+      continue;
+    }
+    if (code != MDB_SUCCESS) fail("cannot write the checkpoint", code);
+    return;
+  }
+}
+
+std::optional<BlockStore::CheckpointInfo> BlockStore::lastCheckpoint() const {
+  Transaction txn(env_, MDB_RDONLY);
+  if (txn.beginCode() != MDB_SUCCESS) fail("cannot read", txn.beginCode());
+  const std::optional<std::string> count = readText(txn.get(), meta_dbi_, kCheckpointCountKey);
+  const std::optional<std::string> stamp = readText(txn.get(), meta_dbi_, kCheckpointStampKey);
+  if (!count || !stamp) return std::nullopt;
+  CheckpointInfo info;
+  info.count = std::strtoull(count->c_str(), nullptr, 10);
+  info.stamp = *stamp;
+  return info;
+}
+
+void BlockStore::sync() {
+  std::shared_lock<std::shared_mutex> lock(remap_mutex_);
+  const int code = mdb_env_sync(env_, 1);
+  if (code != MDB_SUCCESS) fail("cannot flush to disk", code);
 }
 
 std::size_t BlockStore::size() const {
   Transaction txn(env_, MDB_RDONLY);
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot read", txn.beginCode());
-  MDB_stat stat;
-  const int code = mdb_stat(txn.get(), blocks_dbi_, &stat);
-  if (code != MDB_SUCCESS) fail("cannot read", code);
-  return stat.ms_entries;
+  std::size_t count = 0;
+  walk(txn.get(), [&](std::uint64_t, const MDB_val&) { ++count; });
+  return count;
 }
 
 }  // namespace occupancy_fusion

@@ -1,6 +1,8 @@
 #include "occupancy_fusion/map/voxel_map.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cstdint>
 #include <exception>
 #include <mutex>
 #include <stdexcept>
@@ -42,20 +44,58 @@ VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
   min_log_odds_ = config_.model.minLogOdds();
   max_log_odds_ = config_.model.maxLogOdds();
   threshold_log_odds_ = config_.model.thresholdLogOdds();
-  if (config_.max_memory_bytes > 0 && !config_.spill_folder.empty()) {
-    BlockStoreConfig store;
-    store.folder = config_.spill_folder;
-    store.resolution = config_.resolution;
-    store.max_bytes = config_.spill_max_bytes;
-    try {
-      store_ = std::make_unique<BlockStore>(store);
-      store_->clear();  // the map starts empty: blocks of an earlier run would read as this map's
-    } catch (const std::exception& error) {
-      // Mapping goes on in memory with the bound's eviction; spillStatus() says why.
-      store_.reset();
-      recordStoreFailure(error);
-    }
+  openStore();
+}
+
+void VoxelMap::openStore() {
+  if (config_.spill_folder.empty() || (config_.max_memory_bytes == 0 && !config_.checkpoints)) {
+    return;
   }
+  BlockStoreConfig store;
+  store.folder = config_.spill_folder;
+  store.resolution = config_.resolution;
+  store.max_bytes = config_.spill_max_bytes;
+  try {
+    store_ = std::make_unique<BlockStore>(store);
+    if (config_.checkpoints) {
+      resumeFromStore();
+    } else {
+      store_->clear();  // the map starts empty: blocks of an earlier run would read as this map's
+    }
+  } catch (const std::exception& error) {
+    // Mapping goes on in memory (with the bound's eviction); spillStatus() says why.
+    store_.reset();
+    blocks_.clear();
+    spilled_.clear();
+    block_bytes_ = 0;
+    spilled_known_voxels_ = 0;
+    resumed_blocks_ = 0;
+    recordStoreFailure(error);
+  }
+}
+
+void VoxelMap::resumeFromStore() {
+  // Blocks spilled after the last checkpoint belong to no consistent map.
+  store_->clearSpilled();
+  if (const auto last = store_->lastCheckpoint()) {
+    checkpoint_count_ = last->count;
+    resumed_stamp_ = last->stamp;
+  }
+  const std::size_t room =
+      config_.max_memory_bytes == 0 ? SIZE_MAX : config_.max_memory_bytes / 10 * 9;
+  store_->forEach([&](std::uint64_t key, const VoxelBlock& block) {
+    ++resumed_blocks_;
+    StoredBlock stored = StoredBlock::newDense();
+    *stored.dense() = block;  // version 0: its first write logs it
+    if (hybrid()) stored.settle(kMaxSparseBricks);
+    if (storageBytesLocked() + stored.bytes() > room) {
+      spilled_.emplace(key, block.known_count);
+      spilled_known_voxels_ += static_cast<std::size_t>(block.known_count);
+      return;
+    }
+    block_bytes_ += stored.bytes();
+    blocks_.emplace(key, std::move(stored));
+  });
 }
 
 VoxelMap::~VoxelMap() = default;
@@ -195,9 +235,18 @@ void VoxelMap::settleWrittenBlocks() {
   dense_written_.clear();
 }
 
-void VoxelMap::markChanged(std::uint64_t key) { change_log_.recordChange(version_, key); }
+void VoxelMap::markChanged(std::uint64_t key) {
+  change_log_.recordChange(version_, key);
+  if (checkpointing()) unsaved_.insert(key);
+}
 
-void VoxelMap::markRemoved(std::uint64_t key) { change_log_.recordRemoval(version_, key); }
+void VoxelMap::markRemoved(std::uint64_t key) {
+  change_log_.recordRemoval(version_, key);
+  if (checkpointing()) {
+    unsaved_.erase(key);
+    removed_since_checkpoint_.insert(key);
+  }
+}
 
 void VoxelMap::finishWrite() {
   settleWrittenBlocks();
@@ -340,6 +389,8 @@ void VoxelMap::reset() {
   block_bytes_ = 0;
   spilled_.clear();
   spilled_known_voxels_ = 0;
+  unsaved_.clear();
+  removed_since_checkpoint_.clear();
   if (store_ != nullptr) {
     try {
       store_->clear();
@@ -361,7 +412,15 @@ void VoxelMap::enforceMemoryBound() {
   // The bound covers the voxel storage; the change log holds about one entry per block.
   if (config_.max_memory_bytes == 0 || storageBytesLocked() <= config_.max_memory_bytes) return;
   const std::vector<std::uint64_t> leaving = farthestBlocksOverTarget();
-  const bool spilled = store_ != nullptr && spillToStore(leaving);
+  // With checkpoints, a block unchanged since the last one is in the store already.
+  std::vector<std::uint64_t> writing;
+  for (std::uint64_t key : leaving) {
+    if (!checkpointing() || unsaved_.count(key) != 0) writing.push_back(key);
+  }
+  const bool spilled = store_ != nullptr && (writing.empty() || spillToStore(writing));
+  if (spilled && checkpointing()) {
+    for (std::uint64_t key : writing) unsaved_.erase(key);  // in the store's spill table now
+  }
   for (std::uint64_t key : leaving) {
     auto it = blocks_.find(key);
     if (spilled) {
@@ -375,7 +434,50 @@ void VoxelMap::enforceMemoryBound() {
     block_bytes_ -= it->second.bytes();
     blocks_.erase(it);
   }
-  if (spilled) blocks_spilled_ += leaving.size();
+  if (spilled) blocks_spilled_ += writing.size();
+}
+
+CheckpointResult VoxelMap::checkpoint(const std::string& stamp) {
+  CheckpointResult result;
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  {
+    std::unique_lock<std::shared_mutex> lock(mutex_);
+    if (!checkpointing()) return result;
+    // In key order: LMDB writes sorted keys fastest.
+    std::vector<std::uint64_t> keys(unsaved_.begin(), unsaved_.end());
+    std::sort(keys.begin(), keys.end());
+    const std::vector<std::uint64_t> removed(removed_since_checkpoint_.begin(),
+                                             removed_since_checkpoint_.end());
+    VoxelBlock scratch;
+    try {
+      store_->checkpoint(keys,
+                         [&](std::size_t i) -> const VoxelBlock& {
+                           return blocks_.find(keys[i])->second.view(&scratch);
+                         },
+                         removed, {checkpoint_count_ + 1, stamp});
+    } catch (const std::exception& error) {
+      recordStoreFailure(error);  // the blocks stay unsaved: the next checkpoint tries again
+      return result;
+    }
+    ++checkpoint_count_;
+    ++checkpoints_written_;
+    last_checkpoint_stamp_ = stamp;
+    unsaved_.clear();
+    removed_since_checkpoint_.clear();
+    result.written = true;
+    result.blocks_written = keys.size();
+    result.blocks_removed = removed.size();
+  }
+  const auto locked = Clock::now();
+  result.locked_seconds = std::chrono::duration<double>(locked - start).count();
+  try {
+    store_->sync();
+  } catch (const std::exception& error) {
+    recordStoreFailure(error);
+  }
+  result.sync_seconds = std::chrono::duration<double>(Clock::now() - locked).count();
+  return result;
 }
 
 std::vector<std::uint64_t> VoxelMap::farthestBlocksOverTarget() const {
@@ -631,6 +733,12 @@ SpillStatus VoxelMap::spillStatus() const {
   std::lock_guard<std::mutex> failure_lock(failure_mutex_);
   status.failures = store_failures_;
   status.last_error = last_store_error_;
+  status.checkpoints = checkpointing();
+  status.resumed_blocks = resumed_blocks_;
+  status.resumed_stamp = resumed_stamp_;
+  status.checkpoints_written = checkpoints_written_;
+  status.unsaved_blocks = unsaved_.size();
+  status.last_checkpoint_stamp = last_checkpoint_stamp_;
   return status;
 }
 

@@ -6,12 +6,16 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
+#include <shared_mutex>
 #include <string>
 #include <vector>
 
 #include "occupancy_fusion/map/voxel_block.h"
 
 struct MDB_env;  // lmdb.h's, kept out of this header
+struct MDB_txn;
+struct MDB_val;
 
 namespace occupancy_fusion {
 
@@ -25,18 +29,23 @@ struct BlockStoreConfig {
 };
 
 // Keys are packed block indices (spatial_key.h's packKey), values the blocks' BrickEncoding.
+// Two tables of blocks: the checkpoint (the map as it was at the last checkpoint(), written in
+// one transaction: all of it or none) and the blocks spilled since (put()), which are newer; the
+// store's contents (get, forEach, size) are the checkpoint with the spilled blocks over it.
 // Beside the blocks, a metadata table holds the format version, the block side and the map's
-// resolution. Every failure throws std::runtime_error naming the folder: a folder that cannot be
-// created or written, a store of another resolution, block side or format, a damaged store, a
-// write that does not fit in max_bytes, a folder in use by another store (in this process or
-// another: the store holds an exclusive flock on in_use.lock in its folder while open).
+// resolution, and the last checkpoint's number and stamp. Every failure throws std::runtime_error
+// naming the folder: a folder that cannot be created or written, a store of another resolution,
+// block side or format, a damaged store, a write that does not fit in max_bytes, a folder in use by
+// another store (in this process or another: the store holds an exclusive flock on in_use.lock in
+// its folder while open).
 //
 // Commits are not flushed to disk one by one (MDB_NOSYNC): a process that dies keeps every
 // committed write (they are in the system's page cache), a system crash may lose the newest.
 //
 // Thread safety: reads (get, forEach, size) may run in parallel with each other, a read may be
-// nested in another's callback, but a write (put, clear) must not run alongside any other call
-// (growing the store remaps it): the owner's lock keeps them apart, as VoxelMap's does.
+// nested in another's callback, but a write (put, clear, checkpoint) must not run alongside any
+// other call (growing the store remaps it): the owner's lock keeps them apart, as VoxelMap's does.
+// sync() alone may run alongside anything.
 class BlockStore {
  public:
   static constexpr int kFormatVersion = 1;
@@ -59,8 +68,25 @@ class BlockStore {
   // Every block, in increasing key order, read in one transaction (a consistent view), decoded
   // one at a time: memory stays one block whatever the store's size.
   void forEach(const std::function<void(std::uint64_t, const VoxelBlock&)>& fn) const;
-  // Removes every block; the metadata stays.
+  // Removes every block (and the checkpoint's number and stamp); the metadata stays.
   void clear();
+  // Removes the blocks spilled since the last checkpoint: the store holds the checkpoint alone
+  // (what a resumed map starts from; blocks spilled after it belong to no consistent map).
+  void clearSpilled();
+
+  // A checkpoint: in one transaction, the spilled blocks join the checkpoint, the blocks keys[i]
+  // (block_at(i)) are written over it and the `removed` ones leave it. Cost: the blocks changed
+  // since the last one, not the map's size.
+  struct CheckpointInfo {
+    std::uint64_t count = 0;  // checkpoints written to this store, this one included
+    std::string stamp;        // the writer's words, e.g. the time
+  };
+  void checkpoint(const std::vector<std::uint64_t>& keys, const BlockSource& block_at,
+                  const std::vector<std::uint64_t>& removed, const CheckpointInfo& info);
+  std::optional<CheckpointInfo> lastCheckpoint() const;
+  // Flushes what was committed to the disk (commits are not flushed one by one, see above). May
+  // run alongside reads and writes.
+  void sync();
 
   std::size_t size() const;       // blocks held
   std::size_t sizeLimit() const;  // the current map size, bytes
@@ -71,12 +97,20 @@ class BlockStore {
   void close();
   void checkOrWriteMetadata();
   void grow(std::size_t current);
+  void drop(bool checkpoint_too);
+  using EntryFn = std::function<void(std::uint64_t, const MDB_val&)>;
+  void walk(MDB_txn* txn, const EntryFn& fn) const;  // the merged view, in key order
+  int writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& keys,
+                      const BlockSource& block_at, const std::vector<std::uint64_t>& removed,
+                      const CheckpointInfo& info);
   [[noreturn]] void fail(const std::string& what, int code) const;
 
   BlockStoreConfig config_;
   int lock_fd_ = -1;  // holds the folder's flock while the store is open
   MDB_env* env_ = nullptr;
-  unsigned int blocks_dbi_ = 0;
+  unsigned int blocks_dbi_ = 0;      // spilled since the last checkpoint
+  unsigned int checkpoint_dbi_ = 0;  // the last checkpoint
+  std::shared_mutex remap_mutex_;    // growing the map (exclusive) vs sync() (shared)
   unsigned int meta_dbi_ = 0;
 };
 

@@ -46,6 +46,10 @@ struct VoxelMapConfig {
   // (VoxelMap's "Spill store"); empty: evicted blocks are dropped.
   std::string spill_folder;
   std::size_t spill_max_bytes = 0;  // the store's size limit on disk; 0: the disk's
+  // With a spill_folder, with or without a memory bound: the store also keeps the map's
+  // checkpoints (checkpoint()) and is not emptied at construction: the map resumes from its last
+  // checkpoint (VoxelMap's "Checkpoints").
+  bool checkpoints = false;
   BlockStorage block_storage = BlockStorage::kDense;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
@@ -74,6 +78,22 @@ struct SpillStatus {
   std::size_t blocks_paged_in = 0;  // blocks brought back into memory by writes, in all
   std::size_t failures = 0;         // store operations that failed (blocks dropped or unreadable)
   std::string last_error;           // the newest failure, naming the store's folder
+  // Checkpoints (VoxelMapConfig::checkpoints with a store that opened).
+  bool checkpoints = false;
+  std::size_t resumed_blocks = 0;       // read from the store's last checkpoint at construction
+  std::string resumed_stamp;            // that checkpoint's stamp ("" if none)
+  std::size_t checkpoints_written = 0;  // by this map
+  std::size_t unsaved_blocks = 0;       // in memory, written since the last checkpoint
+  std::string last_checkpoint_stamp;
+};
+
+// What one VoxelMap::checkpoint() did.
+struct CheckpointResult {
+  bool written = false;            // false: no checkpoints, or the store failed (see spillStatus)
+  std::size_t blocks_written = 0;  // blocks in memory written since the previous checkpoint
+  std::size_t blocks_removed = 0;  // blocks the map lost since (left the checkpoint)
+  double locked_seconds = 0.0;     // writers waited this long (the transaction)
+  double sync_seconds = 0.0;       // then the flush to disk, writers not waiting
 };
 
 struct VoxelCounts {
@@ -114,7 +134,15 @@ struct VoxelCounts {
 // while mapping (a full disk, spill_max_bytes reached, a damaged entry) never throws out of a
 // write: a block that cannot be spilled is dropped as without a store, one that cannot be read
 // back reads as unknown (and is dropped when written), and spillStatus() counts the failure.
-// The store is emptied when the map is constructed and by reset().
+// The store is emptied when the map is constructed (unless it resumes, below) and by reset().
+//
+// Checkpoints: with VoxelMapConfig::checkpoints, checkpoint() writes the blocks written since the
+// previous one to the store in one transaction (all or nothing), and flushes it to disk: the
+// store then holds the map as it was at that call. Evicted blocks already in the checkpoint
+// unchanged are not written again. A map constructed on the folder resumes from the last
+// checkpoint: the blocks written after it (also those spilled) are discarded, so the map equals
+// the checkpoint exactly. Resumed blocks come into memory up to 90 % of the memory bound; the
+// rest stay in the store (spilled).
 class VoxelMap {
  public:
   // Validates config; with a memory bound and a spill folder, opens (or creates) the store. When
@@ -165,6 +193,9 @@ class VoxelMap {
   std::size_t clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max);
   void reset();
   void setFocus(const Eigen::Vector3d& sensor_origin);
+  // See "Checkpoints". stamp: recorded with it (e.g. the time). Writers wait for the transaction
+  // (cost: the blocks written since the previous checkpoint), not for the flush to disk.
+  CheckpointResult checkpoint(const std::string& stamp);
 
   // Iteration (under the shared lock). fn(voxel index, log-odds).
   using VoxelFn = std::function<void(const VoxelIndex&, float)>;
@@ -229,6 +260,9 @@ class VoxelMap {
   void pageInSpilledInRange(const BlockIndex& lo, const BlockIndex& hi);
   std::vector<std::uint64_t> farthestBlocksOverTarget() const;
   bool spillToStore(const std::vector<std::uint64_t>& keys);
+  void openStore();
+  void resumeFromStore();
+  bool checkpointing() const { return store_ != nullptr && config_.checkpoints; }
   void recordStoreFailure(const std::exception& error) const;
   bool hybrid() const { return config_.block_storage == BlockStorage::kHybrid; }
   void settleWrittenBlocks();
@@ -261,6 +295,15 @@ class VoxelMap {
   std::size_t spilled_known_voxels_ = 0;
   std::size_t blocks_spilled_ = 0;
   std::size_t blocks_paged_in_ = 0;
+  // Checkpoints: blocks in memory written since the last checkpoint (those spilled since are in
+  // the store's spill table), and blocks lost since (evicted without the store, unreadable).
+  SpatialKeySet unsaved_;
+  SpatialKeySet removed_since_checkpoint_;
+  std::size_t resumed_blocks_ = 0;
+  std::string resumed_stamp_;
+  std::uint64_t checkpoint_count_ = 0;  // the store's, this map's included
+  std::size_t checkpoints_written_ = 0;
+  std::string last_checkpoint_stamp_;
   // Failures can happen in readers (under the shared lock): counted under a lock of their own.
   mutable std::mutex failure_mutex_;
   mutable std::size_t store_failures_ = 0;
