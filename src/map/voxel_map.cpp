@@ -37,6 +37,10 @@ void VoxelMapConfig::validate() const {
                                 std::to_string(resolution));
   }
   model.validate();
+  if (!(checkpoint_period >= 0.0) || !std::isfinite(checkpoint_period)) {
+    throw std::invalid_argument("checkpoint_period must be >= 0 s (0: no checkpoints), got " +
+                                std::to_string(checkpoint_period));
+  }
 }
 
 VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
@@ -48,7 +52,8 @@ VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
 }
 
 void VoxelMap::openStore() {
-  if (config_.spill_folder.empty() || (config_.max_memory_bytes == 0 && !config_.checkpoints)) {
+  const bool checkpoints = config_.checkpoint_period > 0;
+  if (config_.spill_folder.empty() || (config_.max_memory_bytes == 0 && !checkpoints)) {
     return;
   }
   BlockStoreConfig store;
@@ -57,7 +62,7 @@ void VoxelMap::openStore() {
   store.max_bytes = config_.spill_max_bytes;
   try {
     store_ = std::make_unique<BlockStore>(store);
-    if (config_.checkpoints) {
+    if (checkpoints) {
       resumeFromStore();
     } else {
       store_->clear();  // the map starts empty: blocks of an earlier run would read as this map's

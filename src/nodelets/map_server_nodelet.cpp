@@ -1,6 +1,9 @@
 // MapServer nodelet: gets the shared map of its manager and publishes it (MapPublisher). It can
 // resume a saved map at start (~load_map) and save the map when it is unloaded
-// (~save_on_shutdown), so that a restart loses nothing.
+// (~save_on_shutdown), so that a restart loses nothing; with checkpoint_period and spill_folder
+// it checkpoints the map to its store that often (and once more when unloaded), and a map
+// created on that store resumed its last checkpoint.
+#include <ctime>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -35,7 +38,10 @@ class MapServer : public nodelet::Nodelet {
   // still be writing: the save reads through the map's shared lock, and the map lives as long as
   // this nodelet holds it.
   ~MapServer() override {
-    if (!map_ || persistence_.save_on_shutdown.empty()) return;
+    if (!map_) return;
+    checkpoint_timer_.stop();
+    if (map_->voxels().spillStatus().checkpoints) checkpoint();
+    if (persistence_.save_on_shutdown.empty()) return;
     std::vector<std::string> written;
     try {
       saveMapFiles(*map_, grid_config_, persistence_.save_on_shutdown, &written);
@@ -59,6 +65,7 @@ class MapServer : public nodelet::Nodelet {
       publisher_ = std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(),
                                                   getName(), map, publisher_config);
       map_ = std::move(map);  // only now: a nodelet that failed to start saves nothing
+      startCheckpoints();
     } catch (const std::invalid_argument& error) {
       NODELET_FATAL("invalid parameter: %s", error.what());
       throw;
@@ -99,7 +106,47 @@ class MapServer : public nodelet::Nodelet {
                  map->name().c_str(), path.c_str(), resumed.known_voxels, resumed.layer_cells);
   }
 
+  // checkpoint_period (a map parameter): the map's store keeps a checkpoint that often.
+  void startCheckpoints() {
+    const VoxelMap& voxels = map_->voxels();
+    const double period = voxels.config().checkpoint_period;
+    if (!(period > 0)) return;
+    const SpillStatus status = voxels.spillStatus();
+    if (!status.checkpoints) {
+      NODELET_ERROR(
+          "checkpoint_period %.1f s: no checkpoints, the store in spill_folder '%s' "
+          "is not open: %s",
+          period, voxels.config().spill_folder.c_str(),
+          voxels.config().spill_folder.empty() ? "spill_folder is not set"
+                                               : status.last_error.c_str());
+      return;
+    }
+    NODELET_INFO("map '%s' checkpointed to %s every %.1f s; resumed %zu blocks (%s)",
+                 map_->name().c_str(), voxels.config().spill_folder.c_str(), period,
+                 status.resumed_blocks,
+                 status.resumed_stamp.empty() ? "no checkpoint there, a new map"
+                                              : status.resumed_stamp.c_str());
+    checkpoint_timer_ = getNodeHandle().createWallTimer(
+        ros::WallDuration(period), [this](const ros::WallTimerEvent&) { checkpoint(); });
+  }
+
+  void checkpoint() {
+    const std::time_t now = std::time(nullptr);
+    char stamp[64];
+    std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    const CheckpointResult result = map_->voxels().checkpoint(stamp);
+    if (!result.written) {
+      NODELET_WARN_THROTTLE(60.0, "checkpoint of map '%s' failed (mapping goes on): %s",
+                            map_->name().c_str(), map_->voxels().spillStatus().last_error.c_str());
+      return;
+    }
+    NODELET_DEBUG("checkpoint %s: %zu blocks written, %zu removed, %.1f ms locked, %.1f ms sync",
+                  stamp, result.blocks_written, result.blocks_removed, 1e3 * result.locked_seconds,
+                  1e3 * result.sync_seconds);
+  }
+
   MapPersistenceConfig persistence_;
+  ros::WallTimer checkpoint_timer_;
   FusedGridConfig grid_config_;
   std::shared_ptr<SharedMap> map_;
   std::unique_ptr<MapPublisher> publisher_;

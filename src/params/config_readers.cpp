@@ -53,6 +53,7 @@ VoxelMapConfig readVoxelMapConfig(const ParameterSource& source) {
                                 std::to_string(spill_max_mb));
   }
   config.spill_max_bytes = static_cast<std::size_t>(spill_max_mb * kBytesPerMebibyte);
+  source.get("checkpoint_period", &config.checkpoint_period);
   config.block_storage = readBlockStorage(source);
   config.validate();
   return config;

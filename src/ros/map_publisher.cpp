@@ -366,6 +366,13 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
     status.add("blocks written to the spill store", spill.blocks_written);
     status.add("blocks paged in", spill.blocks_paged_in);
     status.add("spill store failures", spill.failures);
+    if (spill.checkpoints) {
+      status.add("checkpoints written", spill.checkpoints_written);
+      status.add("last checkpoint", spill.last_checkpoint_stamp);
+      status.add("blocks changed since the last checkpoint", spill.unsaved_blocks);
+      status.add("blocks resumed from the store", spill.resumed_blocks);
+      status.add("resumed checkpoint", spill.resumed_stamp);
+    }
   }
   status.add("layer cells", map_->layer().knownCellCount());
   status.add("longest lock hold (ms)", lock_statistics_.longestHoldMs());

@@ -26,9 +26,12 @@ std::shared_ptr<SharedMap> acquireSharedMap(const ParameterSource& parameters,
            map->name().c_str(), map->frameId().c_str(), map->voxels().resolution());
   const VoxelMapConfig& existing = map->config().voxels;
   if (!sameModel(existing.model, wanted.voxels.model) ||
-      existing.max_memory_bytes != wanted.voxels.max_memory_bytes) {
+      existing.max_memory_bytes != wanted.voxels.max_memory_bytes ||
+      existing.spill_folder != wanted.voxels.spill_folder ||
+      existing.checkpoint_period != wanted.voxels.checkpoint_period) {
     ROS_WARN(
-        "%s: sensor_model/* or max_memory_mb differ from those of the shared map '%s', "
+        "%s: sensor_model/*, max_memory_mb, spill_folder or checkpoint_period differ from those "
+        "of the shared map '%s', "
         "which keeps the settings of the nodelet that created it",
         nodelet_name.c_str(), map->name().c_str());
   }

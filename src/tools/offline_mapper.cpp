@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -192,6 +193,56 @@ class ProgressPrinter {
   bool quiet_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_print_ = start_;
+};
+
+// checkpoint_period with spill_folder: the map resumed the store's last checkpoint, and is
+// checkpointed to it that often (wall time) and at the end, as the MapServer does.
+class Checkpoints {
+ public:
+  Checkpoints(MappingSession* mapper, bool quiet) : mapper_(mapper) {
+    const VoxelMap& map = mapper_->map();
+    period_ = map.config().checkpoint_period;
+    const SpillStatus status = map.spillStatus();
+    if (!(period_ > 0)) return;
+    if (!status.checkpoints) {
+      std::cerr << "offline_mapper: warning: checkpoint_period " << period_
+                << " s but no checkpoints: "
+                << (map.config().spill_folder.empty() ? "spill_folder is not set"
+                                                      : status.last_error)
+                << "\n";
+      period_ = 0;
+      return;
+    }
+    if (!quiet) {
+      std::cerr << "offline_mapper: checkpoints to " << map.config().spill_folder << " every "
+                << period_ << " s; resumed " << status.resumed_blocks << " blocks"
+                << (status.resumed_stamp.empty() ? " (no checkpoint there)"
+                                                 : " of " + status.resumed_stamp)
+                << "\n";
+    }
+  }
+  void whenDue() {
+    if (period_ > 0 &&
+        std::chrono::steady_clock::now() - last_ >= std::chrono::duration<double>(period_)) {
+      now();
+    }
+  }
+  void now() {
+    if (!(period_ > 0)) return;
+    last_ = std::chrono::steady_clock::now();
+    const std::time_t wall = std::time(nullptr);
+    char stamp[64];
+    std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&wall));
+    if (!mapper_->checkpoint(stamp).written) {
+      std::cerr << "offline_mapper: warning: checkpoint failed: "
+                << mapper_->map().spillStatus().last_error << "\n";
+    }
+  }
+
+ private:
+  MappingSession* mapper_;
+  double period_ = 0;
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
 double peakResidentMebibytes() {
@@ -413,15 +464,20 @@ int run(int argc, char** argv) {
   for (const auto& reader : setup.readers) total_frames += reader->frameCount();
   MappingSession mapper(setup.config, nullptr, &std::cerr);
   if (!setup.options.load_map.empty()) resume(setup.options.load_map, &mapper);
+  Checkpoints checkpoints(&mapper, setup.options.quiet);
   ProgressPrinter progress(total_frames, &mapper, setup.options.quiet);
   ScanPicker picker(&mapper, setup.options.single_scan);
   std::size_t frames_before = 0;
   for (const auto& reader : setup.readers) {
     if (!setup.options.quiet) std::cerr << "offline_mapper: " << reader->description() << "\n";
     mapper.setPoseSource(&reader->poses());
-    reader->read(&picker, [&](std::size_t done) { progress(frames_before + done); });
+    reader->read(&picker, [&](std::size_t done) {
+      progress(frames_before + done);
+      checkpoints.whenDue();
+    });
     frames_before += reader->frameCount();
   }
+  checkpoints.now();
   MapOutputs outputs;
   if (mapper.map().knownVoxelCount() > 0 || mapper.laserLayer().knownCellCount() > 0) {
     MapSaveOptions save;

@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
   config.resolution = 0.1;
   config.max_memory_bytes = 40 * sizeof(VoxelBlock);
   config.spill_folder = argv[1];
-  config.checkpoints = true;
+  config.checkpoint_period = 1.0;  // called by hand here
   VoxelMap map(config);
   const SpillStatus status = map.spillStatus();
   if (!status.checkpoints) {

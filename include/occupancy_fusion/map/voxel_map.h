@@ -46,10 +46,10 @@ struct VoxelMapConfig {
   // (VoxelMap's "Spill store"); empty: evicted blocks are dropped.
   std::string spill_folder;
   std::size_t spill_max_bytes = 0;  // the store's size limit on disk; 0: the disk's
-  // With a spill_folder, with or without a memory bound: the store also keeps the map's
-  // checkpoints (checkpoint()) and is not emptied at construction: the map resumes from its last
-  // checkpoint (VoxelMap's "Checkpoints").
-  bool checkpoints = false;
+  // s. Above 0, with a spill_folder, with or without a memory bound: the store also keeps the
+  // map's checkpoints and is not emptied at construction: the map resumes from its last
+  // checkpoint (VoxelMap's "Checkpoints"). Whoever owns the map calls checkpoint() this often.
+  double checkpoint_period = 0.0;
   BlockStorage block_storage = BlockStorage::kDense;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
@@ -78,7 +78,7 @@ struct SpillStatus {
   std::size_t blocks_paged_in = 0;  // blocks brought back into memory by writes, in all
   std::size_t failures = 0;         // store operations that failed (blocks dropped or unreadable)
   std::string last_error;           // the newest failure, naming the store's folder
-  // Checkpoints (VoxelMapConfig::checkpoints with a store that opened).
+  // Checkpoints (VoxelMapConfig::checkpoint_period with a store that opened).
   bool checkpoints = false;
   std::size_t resumed_blocks = 0;       // read from the store's last checkpoint at construction
   std::string resumed_stamp;            // that checkpoint's stamp ("" if none)
@@ -262,7 +262,7 @@ class VoxelMap {
   bool spillToStore(const std::vector<std::uint64_t>& keys);
   void openStore();
   void resumeFromStore();
-  bool checkpointing() const { return store_ != nullptr && config_.checkpoints; }
+  bool checkpointing() const { return store_ != nullptr && config_.checkpoint_period > 0; }
   void recordStoreFailure(const std::exception& error) const;
   bool hybrid() const { return config_.block_storage == BlockStorage::kHybrid; }
   void settleWrittenBlocks();

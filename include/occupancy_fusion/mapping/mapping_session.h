@@ -28,9 +28,9 @@
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
-#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
@@ -158,6 +158,8 @@ class MappingSession : public FrameConsumer {
 
   const MappingSessionConfig& config() const { return config_; }
   const VoxelMap& map() const { return *voxels_; }
+  // A checkpoint of the map to its store (VoxelMapConfig::checkpoint_period), stamped `stamp`.
+  CheckpointResult checkpoint(const std::string& stamp) { return voxels_->checkpoint(stamp); }
   // The 2D layer laser scans write (empty until a recording has scans); part of the fused view.
   const GridLayer2D& laserLayer() const { return *layer_; }
   // The fused 2D view over config().fused_grid's height band.

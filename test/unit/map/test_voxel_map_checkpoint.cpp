@@ -51,7 +51,7 @@ VoxelMapConfig checkpointConfig(const std::string& folder, BlockStorage storage,
   config.block_storage = storage;
   config.max_memory_bytes = bound_blocks * sizeof(VoxelBlock);
   config.spill_folder = folder;
-  config.checkpoints = true;
+  config.checkpoint_period = 1.0;  // called by hand here
   return config;
 }
 

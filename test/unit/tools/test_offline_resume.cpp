@@ -102,6 +102,24 @@ TEST_F(OfflineResume, SecondPartResumedFromTheFirstEqualsTheWholeRecording) {
   EXPECT_TRUE(bytes("resumed", ".pgm") == bytes("whole", ".pgm"));
 }
 
+// The same through the checkpoint store (spill_folder, checkpoint_period): the first run's final
+// checkpoint is what the second run starts from, with a memory bound that keeps most of the map
+// in the store. The 2D laser layer is not checkpointed: only the voxels are compared.
+TEST_F(OfflineResume, SecondPartResumedFromTheCheckpointStoreEqualsTheWholeRecording) {
+  const std::string store = " --set spill_folder=" + quoted(dir_ / "store") +
+                            " --set checkpoint_period=3600 --set max_memory_mb=0.05";
+  const RunResult first = map("--bag " + quoted(dir_ / "first.bag") + store, "first_store");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const RunResult second = map("--bag " + quoted(dir_ / "second.bag") + store, "second_store");
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  const RunResult whole = map(
+      "--bag " + quoted(dir_ / "first.bag") + " --bag " + quoted(dir_ / "second.bag"), "whole_all");
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_EQ(second.err.find("warning"), std::string::npos) << second.err;
+  EXPECT_NE(bytes("first_store", ".ot"), bytes("whole_all", ".ot"));
+  EXPECT_TRUE(bytes("second_store", ".ot") == bytes("whole_all", ".ot"));
+}
+
 TEST_F(OfflineResume, FilesThatCannotBeResumedAreBadInput) {
   const RunResult absent =
       map("--bag " + quoted(dir_ / "second.bag") + " --load-map " + quoted(dir_ / "absent.ot"),
