@@ -38,6 +38,8 @@ int runLaser(const CommandLine& args);               // benchmark_laser.cpp
 int runLaserMap(const CommandLine& args);            // benchmark_laser_map.cpp
 int runDisparity(const CommandLine& args);           // benchmark_disparity.cpp
 int runDisparityArtifacts(const CommandLine& args);  // benchmark_disparity_artifacts.cpp
+int runCheckpoint(const CommandLine& args);          // benchmark_checkpoint.cpp
+int runSpill(const CommandLine& args);               // benchmark_spill.cpp
 
 namespace {
 
@@ -343,6 +345,20 @@ const std::vector<Workload>& workloads() {
         "patch_offset_px",
         "seed"},
        runDisparityArtifacts},
+      {"checkpoint",
+       "<scratch folder> [--blocks N[,N...]] [--changed C[,C...]] [--repetitions K]\n"
+       "      VoxelMap::checkpoint on maps of N full blocks after C blocks changed: the time\n"
+       "      writers wait and the flush after it, beside writing the whole map as .ot",
+       {"folder", "blocks", "changed", "repetitions"},
+       runCheckpoint},
+      {"spill",
+       "[--length M] [--step S] [--resolution R] [--bound_mb B [--spill_folder F]]\n"
+       "      [--width W --height H] [--csv PATH] [--save PREFIX]\n"
+       "      a depth camera along M metres of corridor with a room every 8 m into a map with\n"
+       "      or without a memory bound; per frame integration time and resident memory",
+       {"length", "step", "resolution", "bound_mb", "spill_folder", "width", "height", "csv",
+        "save"},
+       runSpill},
   };
   return table;
 }

@@ -1,0 +1,223 @@
+// benchmark spill: a long run through a building much larger than the map's memory bound. A
+// depth camera moves along a corridor with a room every 8 m (alternately left and right, a door,
+// an object inside; a pillar in every other segment), swinging its view into the rooms; the
+// PyramidDepthIntegrator maps it into a VoxelMap with or without a bound (--bound_mb, with
+// --spill_folder: evicted blocks spill to the store). Per frame (--csv): the integration time,
+// the process's resident memory (anonymous, and file-backed: LMDB's mapped pages, which the
+// system can drop), the map's own accounting and its blocks in memory and in the store. At the
+// end the map is saved (--save PREFIX: PREFIX.ot), so that a bounded run and an unbounded one
+// can be compared byte for byte. The building is generated per frame around the camera
+// (segments near it only), so rendering costs the same at the first metre and the thousandth.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/benchmarks/benchmark_harness.h"
+#include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
+#include "occupancy_fusion/map/map_files.h"
+#include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/sim/depth_camera.h"
+#include "occupancy_fusion/sim/scene.h"
+#include "occupancy_fusion/sim/trajectory.h"
+#include "occupancy_fusion/tools/command_line.h"
+
+namespace occupancy_fusion {
+namespace {
+
+using bench::Clock;
+using bench::millisecondsSince;
+
+constexpr double kSegment = 8.0;       // m of corridor per room
+constexpr double kHalfWidth = 1.2;     // m, the corridor's half width
+constexpr double kHeight = 2.6;        // m
+constexpr double kRoomDepth = 4.0;     // m
+constexpr double kWall = 0.2;          // m, wall thickness
+constexpr double kCameraHeight = 1.2;  // m
+
+// A number in [0, 1) from a segment index and a salt: the same building on every run.
+double hashed(long segment, int salt) {
+  std::uint64_t x =
+      static_cast<std::uint64_t>(segment) * 0x9e3779b97f4a7c15ULL + salt * 0xbf58476dULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  x ^= x >> 31;
+  return static_cast<double>(x >> 11) / static_cast<double>(1ULL << 53);
+}
+
+sim::Box box(double x0, double y0, double z0, double x1, double y1, double z1) {
+  return sim::Box::axisAligned({x0, y0, z0}, {x1, y1, z1});
+}
+
+// Segment k spans x in [8k, 8k + 8): floor, ceiling, both corridor walls, the room on side
+// (-1)^k with its door, an object in the room, and in odd segments a pillar in the corridor.
+void addSegment(long k, sim::Scene* scene) {
+  const double x0 = kSegment * static_cast<double>(k), x1 = x0 + kSegment;
+  const double side = k % 2 == 0 ? 1.0 : -1.0;
+  const double far = kHalfWidth + kRoomDepth + 2 * kWall;
+  scene->add(box(x0, -far, -kWall, x1, far, 0.0));               // floor
+  scene->add(box(x0, -far, kHeight, x1, far, kHeight + kWall));  // ceiling
+  // The plain wall on the other side.
+  const double plain = -side * kHalfWidth;
+  scene->add(box(x0, std::min(plain, plain - side * kWall), 0.0, x1,
+                 std::max(plain, plain - side * kWall), kHeight));
+  // The room's side: the corridor wall with a door 1.2 m wide at a hashed place.
+  const double door = x0 + 1.0 + 4.5 * hashed(k, 1);
+  const double wall_in = side * kHalfWidth, wall_out = side * (kHalfWidth + kWall);
+  const double y_lo = std::min(wall_in, wall_out), y_hi = std::max(wall_in, wall_out);
+  scene->add(box(x0, y_lo, 0.0, door, y_hi, kHeight));
+  scene->add(box(door + 1.2, y_lo, 0.0, x1, y_hi, kHeight));
+  scene->add(box(door, y_lo, 2.1, door + 1.2, y_hi, kHeight));  // above the door
+  // The room: its back wall and the walls to the neighbouring rooms.
+  const double back_in = side * (kHalfWidth + kWall + kRoomDepth), back_out = side * far;
+  scene->add(box(x0, std::min(back_in, back_out), 0.0, x1, std::max(back_in, back_out), kHeight));
+  const double room_lo = std::min(wall_out, back_in), room_hi = std::max(wall_out, back_in);
+  scene->add(box(x0, room_lo, 0.0, x0 + kWall, room_hi, kHeight));
+  // An object in the room: a cabinet or a table-sized block.
+  const double size_x = 0.4 + 0.8 * hashed(k, 2), size_y = 0.4 + 0.8 * hashed(k, 3);
+  const double height = 0.5 + 1.3 * hashed(k, 4);
+  const double cx = x0 + 1.0 + (kSegment - 2.0 - size_x) * hashed(k, 5);
+  const double cy = side * (kHalfWidth + kWall + 0.5 + (kRoomDepth - 1.0 - size_y) * hashed(k, 6));
+  scene->add(box(cx, cy - size_y / 2, 0.0, cx + size_x, cy + size_y / 2, height));
+  if (k % 2 == 1) {
+    const double px = x0 + 1.0 + 6.0 * hashed(k, 7);
+    scene->add(box(px, side * 0.7 - 0.15, 0.0, px + 0.3, side * 0.7 + 0.15, kHeight));
+  }
+}
+
+sim::Scene buildingAround(double x, double max_range) {
+  sim::Scene scene;
+  const long first = static_cast<long>(std::floor((x - max_range) / kSegment));
+  const long last = static_cast<long>(std::floor((x + max_range) / kSegment));
+  for (long k = first; k <= last; ++k) addSegment(k, &scene);
+  return scene;
+}
+
+// The camera at metre x of the corridor, 1.2 m high, its view swinging 55 deg to either side
+// once per segment and tilted 8 deg down.
+Eigen::Isometry3d cameraAt(double x) {
+  const double yaw = 55.0 * M_PI / 180.0 * std::sin(2.0 * M_PI * x / kSegment);
+  const Eigen::Vector3d eye(x, 0.0, kCameraHeight);
+  const Eigen::Vector3d view(std::cos(yaw), std::sin(yaw), -std::tan(8.0 * M_PI / 180.0));
+  return sim::lookAt(eye, eye + view);
+}
+
+struct ResidentMemory {
+  double anonymous_mb = 0, file_mb = 0;
+};
+ResidentMemory residentMemory() {
+  ResidentMemory memory;
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  double kb = 0;
+  std::string unit;
+  while (status >> key) {
+    if (key == "RssAnon:" && status >> kb >> unit) memory.anonymous_mb = kb / 1024.0;
+    if (key == "RssFile:" && status >> kb >> unit) memory.file_mb = kb / 1024.0;
+  }
+  return memory;
+}
+
+}  // namespace
+
+int runSpill(const CommandLine& args) {
+  const double length = args.doubleValue("length", 100.0);
+  const double step = args.doubleValue("step", 0.1);
+  const double resolution = args.doubleValue("resolution", 0.05);
+  const double bound_mb = args.doubleValue("bound_mb", 0.0);
+  if (!(length > 0) || !(step > 0) || !(resolution > 0) || !(bound_mb >= 0)) {
+    throw UsageError("--length, --step and --resolution must be positive, --bound_mb >= 0");
+  }
+  const double max_range = 5.0;
+  sim::PinholeCamera camera;
+  camera.width = args.intValue("width", 320);
+  camera.height = args.intValue("height", 240);
+  camera.fx = camera.fy = 0.8 * camera.width;
+  camera.cx = 0.5 * (camera.width - 1);
+  camera.cy = 0.5 * (camera.height - 1);
+  PyramidDepthConfig depth;  // a depth camera's centimetre noise, as benchmark depth
+  depth.k = 0.05;
+  depth.sigma = 0.05;
+  depth.max_range = max_range;
+  const PyramidDepthIntegrator integrator(depth);
+  VoxelMapConfig config;
+  config.resolution = resolution;
+  config.max_memory_bytes = static_cast<std::size_t>(bound_mb * 1024.0 * 1024.0);
+  config.spill_folder = args.value("spill_folder", "");
+  VoxelMap map(config);
+  if (config.max_memory_bytes > 0 && !config.spill_folder.empty() && !map.spillStatus().enabled) {
+    throw UsageError("the spill store did not open: " + map.spillStatus().last_error);
+  }
+  std::FILE* csv = nullptr;
+  if (args.has("csv")) {
+    csv = std::fopen(args.value("csv").c_str(), "w");
+    if (csv == nullptr) throw UsageError("cannot write " + args.value("csv"));
+    std::fprintf(csv,
+                 "frame,x_m,integrate_ms,rss_anon_mb,rss_file_mb,map_mb,blocks_in_memory,"
+                 "blocks_spilled\n");
+  }
+  const int frames = static_cast<int>(length / step);
+  std::printf(
+      "# spill: %d frames, %.0f m at %.2f m a frame, %dx%d depth camera, %.3f m voxels, "
+      "bound %.1f MiB%s, threads %d\n",
+      frames, length, step, camera.width, camera.height, resolution, bound_mb,
+      config.spill_folder.empty() ? "" : (", store " + config.spill_folder).c_str(),
+      omp_get_max_threads());
+  std::vector<double> times;
+  double peak_anon = 0;
+  auto last_progress = Clock::now();
+  for (int frame = 0; frame < frames; ++frame) {
+    const double x = frame * step;
+    const sim::Scene scene = buildingAround(x, max_range + 1.0);
+    const Eigen::Isometry3d pose = cameraAt(x);
+    const sim::DepthImage image = sim::renderDepth(scene, camera, pose, max_range);
+    const DepthImageView view{image.width, image.height, image.depth.data(), 0};
+    const auto start = Clock::now();
+    integrator.integrate(view, camera, pose, &map);
+    const double ms = millisecondsSince(start);
+    times.push_back(ms);
+    const ResidentMemory memory = residentMemory();
+    peak_anon = std::max(peak_anon, memory.anonymous_mb);
+    const VoxelMap::StorageStats stats = map.storageStats();
+    if (csv != nullptr) {
+      std::fprintf(csv, "%d,%.2f,%.3f,%.1f,%.1f,%.1f,%zu,%zu\n", frame, x, ms, memory.anonymous_mb,
+                   memory.file_mb, map.memoryBytes() / 1048576.0,
+                   stats.dense_blocks + stats.sparse_blocks, stats.spilled_blocks);
+    }
+    if (millisecondsSince(last_progress) > 10000) {
+      last_progress = Clock::now();
+      std::fprintf(stderr, "spill: %d / %d frames, %.0f m, resident %.0f MiB, map %.0f MiB\n",
+                   frame + 1, frames, x, memory.anonymous_mb, map.memoryBytes() / 1048576.0);
+    }
+  }
+  if (csv != nullptr) std::fclose(csv);
+  std::vector<double> sorted = times;
+  std::sort(sorted.begin(), sorted.end());
+  double mean = 0;
+  for (double t : times) mean += t / static_cast<double>(times.size());
+  const SpillStatus status = map.spillStatus();
+  std::printf(
+      "spill length_m=%.0f bound_mb=%.1f frames=%d integrate_ms_mean=%.2f "
+      "integrate_ms_median=%.2f integrate_ms_p99=%.2f peak_rss_anon_mb=%.1f "
+      "map_mb=%.1f blocks=%zu spilled=%zu blocks_written=%zu paged_in=%zu "
+      "failures=%zu evicted=%zu known_voxels=%zu\n",
+      length, bound_mb, frames, mean, sorted[sorted.size() / 2],
+      sorted[std::min(sorted.size() - 1, sorted.size() * 99 / 100)], peak_anon,
+      map.memoryBytes() / 1048576.0, map.blockCount(), status.spilled_blocks, status.blocks_written,
+      status.blocks_paged_in, status.failures, map.evictedBlockCount(), map.knownVoxelCount());
+  if (args.has("save")) {
+    const auto start = Clock::now();
+    writeOt(map, args.value("save") + ".ot");
+    std::printf("saved %s.ot in %.1f s, peak resident (anonymous) after the save %.1f MiB\n",
+                args.value("save").c_str(), millisecondsSince(start) / 1000.0,
+                residentMemory().anonymous_mb);
+  }
+  return 0;
+}
+
+}  // namespace occupancy_fusion
