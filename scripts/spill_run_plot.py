@@ -2,7 +2,7 @@
 """Draws two `benchmark spill` runs (--csv) of the same building, one without a memory bound and
 one with it: resident memory (anonymous, and the store's file-backed pages) and the map's own
 accounting against the distance driven, and the integration time per frame (a moving median over
-51 frames), with the bound drawn in.
+201 frames), with the bound drawn in.
 
 Usage: spill_run_plot.py UNBOUNDED_CSV BOUNDED_CSV BOUND_MIB OUTPUT_PNG
 """
@@ -28,7 +28,7 @@ def column(rows, name):
     return [float(row[name]) for row in rows]
 
 
-def moving_median(values, window=51):
+def moving_median(values, window=201):
     half = window // 2
     return [statistics.median(values[max(0, i - half): i + half + 1]) for i in range(len(values))]
 
@@ -45,11 +45,11 @@ def main():
         memory.plot(x, column(rows, "map_mb"), color=colour, linestyle=":", label=label + ": map's accounting")
         time.plot(x, moving_median(column(rows, "integrate_ms")), color=colour, label=label)
     memory.plot(column(bounded, "x_m"), column(bounded, "rss_file_mb"), color="C2",
-                linestyle="--", label="bound: store pages mapped (file-backed)")
+                linestyle="--", label="bound: file-backed resident (libraries, then store pages)")
     memory.axhline(bound, color="grey", linewidth=0.8, label="bound %.0f MiB" % bound)
     memory.set_ylabel("MiB")
     memory.legend(fontsize=8, loc="upper left")
-    time.set_ylabel("integration ms / frame\n(moving median of 51)")
+    time.set_ylabel("integration ms / frame\n(moving median of 201)")
     time.set_xlabel("distance along the corridor (m)")
     time.legend(fontsize=8)
     figure.tight_layout()
