@@ -24,6 +24,7 @@ namespace {
 
 constexpr char kBlocksTable[] = "blocks";  // spilled since the last checkpoint
 constexpr char kCheckpointTable[] = "checkpoint";
+constexpr char kLayerTable[] = "layer_checkpoint";  // a companion layer's records
 constexpr char kMetaTable[] = "meta";
 constexpr char kCheckpointCountKey[] = "checkpoint_count";
 constexpr char kCheckpointStampKey[] = "checkpoint_stamp";
@@ -165,7 +166,7 @@ void BlockStore::open() {
   if (code != MDB_SUCCESS) fail("cannot create an LMDB environment", code);
   std::size_t initial = config_.initial_bytes;
   if (config_.max_bytes != 0 && initial > config_.max_bytes) initial = config_.max_bytes;
-  code = mdb_env_set_maxdbs(env_, 3);
+  code = mdb_env_set_maxdbs(env_, 4);
   if (code == MDB_SUCCESS) code = mdb_env_set_mapsize(env_, initial);
   // MDB_NOTLS: a read transaction is not tied to its thread, so reads can nest (a forEach
   // callback reading a voxel).
@@ -188,6 +189,7 @@ void BlockStore::checkOrWriteMetadata() {
   if (code == MDB_SUCCESS) {
     code = mdb_dbi_open(txn.get(), kCheckpointTable, MDB_CREATE, &checkpoint_dbi_);
   }
+  if (code == MDB_SUCCESS) code = mdb_dbi_open(txn.get(), kLayerTable, MDB_CREATE, &layer_dbi_);
   if (code != MDB_SUCCESS)
     fail("not a block store, or a damaged one: its tables do not open", code);
   const std::optional<std::string> format = readText(txn.get(), meta_dbi_, kFormatKey);
@@ -358,6 +360,7 @@ void BlockStore::drop(bool checkpoint_too) {
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot write", txn.beginCode());
   int code = mdb_drop(txn.get(), blocks_dbi_, 0);
   if (code == MDB_SUCCESS && checkpoint_too) code = mdb_drop(txn.get(), checkpoint_dbi_, 0);
+  if (code == MDB_SUCCESS && checkpoint_too) code = mdb_drop(txn.get(), layer_dbi_, 0);
   if (code == MDB_SUCCESS && checkpoint_too) {
     for (const char* key : {kCheckpointCountKey, kCheckpointStampKey}) {
       MDB_val name = textValue(key);
@@ -373,7 +376,7 @@ void BlockStore::drop(bool checkpoint_too) {
 int BlockStore::writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& keys,
                                 const BlockSource& block_at,
                                 const std::vector<std::uint64_t>& removed,
-                                const CheckpointInfo& info) {
+                                const CheckpointInfo& info, const LayerRecords* layer) {
   // 1. The blocks spilled since the last checkpoint join it (spilled blocks are the map's newest).
   int code = MDB_SUCCESS;
   {
@@ -404,6 +407,18 @@ int BlockStore::writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& 
     code = mdb_del(txn, checkpoint_dbi_, &name, nullptr);
     if (code == MDB_NOTFOUND) code = MDB_SUCCESS;
   }
+  // 4. The companion layer's records.
+  if (layer != nullptr && layer->replace_all && code == MDB_SUCCESS) {
+    code = mdb_drop(txn, layer_dbi_, 0);
+  }
+  for (std::size_t i = 0; layer != nullptr && i < layer->records.size() && code == MDB_SUCCESS;
+       ++i) {
+    const LayerRecord& record = layer->records[i];
+    KeyBytes key(record.key);
+    MDB_val name = key.value();
+    MDB_val value{record.bytes.size(), const_cast<unsigned char*>(record.bytes.data())};
+    code = mdb_put(txn, layer_dbi_, &name, &value, 0);
+  }
   const std::pair<const char*, std::string> entries[] = {
       {kCheckpointCountKey, std::to_string(info.count)}, {kCheckpointStampKey, info.stamp}};
   for (const auto& [key, text] : entries) {
@@ -416,12 +431,13 @@ int BlockStore::writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& 
 }
 
 void BlockStore::checkpoint(const std::vector<std::uint64_t>& keys, const BlockSource& block_at,
-                            const std::vector<std::uint64_t>& removed, const CheckpointInfo& info) {
+                            const std::vector<std::uint64_t>& removed, const CheckpointInfo& info,
+                            const LayerRecords* layer) {
   for (;;) {
     const std::size_t limit = sizeLimit();
     Transaction txn(env_, 0);
     if (txn.beginCode() != MDB_SUCCESS) fail("cannot write", txn.beginCode());
-    int code = writeCheckpoint(txn.get(), keys, block_at, removed, info);
+    int code = writeCheckpoint(txn.get(), keys, block_at, removed, info, layer);
     if (code == MDB_SUCCESS) code = txn.commit();
     if (code == MDB_MAP_FULL) {
       txn.abort();
@@ -431,6 +447,20 @@ void BlockStore::checkpoint(const std::vector<std::uint64_t>& keys, const BlockS
     if (code != MDB_SUCCESS) fail("cannot write the checkpoint", code);
     return;
   }
+}
+
+void BlockStore::forEachLayerRecord(
+    const std::function<void(std::uint64_t, const unsigned char*, std::size_t)>& fn) const {
+  Transaction txn(env_, MDB_RDONLY);
+  if (txn.beginCode() != MDB_SUCCESS) fail("cannot read", txn.beginCode());
+  Cursor cursor(txn.get(), layer_dbi_);
+  if (cursor.openCode() != MDB_SUCCESS) fail("cannot read", cursor.openCode());
+  MDB_val name, value;
+  int code = mdb_cursor_get(cursor.get(), &name, &value, MDB_FIRST);
+  for (; code == MDB_SUCCESS; code = mdb_cursor_get(cursor.get(), &name, &value, MDB_NEXT)) {
+    fn(KeyBytes::decode(name), static_cast<const unsigned char*>(value.mv_data), value.mv_size);
+  }
+  if (code != MDB_NOTFOUND) fail("cannot read the layer", code);
 }
 
 std::optional<BlockStore::CheckpointInfo> BlockStore::lastCheckpoint() const {

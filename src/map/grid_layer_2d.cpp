@@ -129,6 +129,15 @@ void GridLayer2D::addRaster(const CellIndex& origin_cell, int width, int height,
   finishWrite();
 }
 
+void GridLayer2D::restoreTile(const TileIndex& tile, const GridTile& cells) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  GridTile& target = tileForWrite(tile);
+  for (int linear = 0; linear < GridTile::kArea; ++linear) {
+    target.set(linear, cells.log_odds[linear]);
+  }
+  finishWrite();
+}
+
 void GridLayer2D::importRaster(const LogOddsRaster& raster) {
   if (std::abs(raster.resolution - config_.resolution) > 1e-9 * config_.resolution) {
     throw std::invalid_argument("GridLayer2D::importRaster: the raster's resolution " +

@@ -442,7 +442,15 @@ void VoxelMap::enforceMemoryBound() {
   if (spilled) blocks_spilled_ += writing.size();
 }
 
-CheckpointResult VoxelMap::checkpoint(const std::string& stamp) {
+void VoxelMap::forEachResumedLayerRecord(
+    const std::function<void(std::uint64_t, const unsigned char*, std::size_t)>& fn) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  if (!checkpointing() || resumed_stamp_.empty()) return;
+  store_->forEachLayerRecord(fn);
+}
+
+CheckpointResult VoxelMap::checkpoint(const std::string& stamp,
+                                      const BlockStore::LayerRecords* layer) {
   CheckpointResult result;
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -456,11 +464,12 @@ CheckpointResult VoxelMap::checkpoint(const std::string& stamp) {
                                              removed_since_checkpoint_.end());
     VoxelBlock scratch;
     try {
-      store_->checkpoint(keys,
-                         [&](std::size_t i) -> const VoxelBlock& {
-                           return blocks_.find(keys[i])->second.view(&scratch);
-                         },
-                         removed, {checkpoint_count_ + 1, stamp});
+      store_->checkpoint(
+          keys,
+          [&](std::size_t i) -> const VoxelBlock& {
+            return blocks_.find(keys[i])->second.view(&scratch);
+          },
+          removed, {checkpoint_count_ + 1, stamp}, layer);
     } catch (const std::exception& error) {
       recordStoreFailure(error);  // the blocks stay unsaved: the next checkpoint tries again
       return result;
@@ -473,6 +482,7 @@ CheckpointResult VoxelMap::checkpoint(const std::string& stamp) {
     result.written = true;
     result.blocks_written = keys.size();
     result.blocks_removed = removed.size();
+    result.layer_records = layer != nullptr ? layer->records.size() : 0;
   }
   const auto locked = Clock::now();
   result.locked_seconds = std::chrono::duration<double>(locked - start).count();

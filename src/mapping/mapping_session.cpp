@@ -117,6 +117,9 @@ MappingSession::MappingSession(const MappingSessionConfig& config, VoxelMap* vox
     own_layer_ = std::make_unique<GridLayer2D>(laserLayerConfig(config_.map));
     layer_ = own_layer_.get();
   }
+  if (own_voxels_ && own_layer_) {
+    checkpoints_ = std::make_unique<MapCheckpoints>(voxels_, layer_);
+  }
   for (const LaserSourceConfig& laser_source : config_.laser_sources) {
     source_integrators_.push_back(std::make_unique<PolarLaserIntegrator>(laser_source.integrator));
   }

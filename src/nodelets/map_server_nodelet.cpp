@@ -121,11 +121,13 @@ class MapServer : public nodelet::Nodelet {
                                                : status.last_error.c_str());
       return;
     }
-    NODELET_INFO("map '%s' checkpointed to %s every %.1f s; resumed %zu blocks (%s)",
-                 map_->name().c_str(), voxels.config().spill_folder.c_str(), period,
-                 status.resumed_blocks,
-                 status.resumed_stamp.empty() ? "no checkpoint there, a new map"
-                                              : status.resumed_stamp.c_str());
+    NODELET_INFO(
+        "map '%s' checkpointed to %s every %.1f s; resumed %zu blocks and %zu laser "
+        "layer tiles (%s)",
+        map_->name().c_str(), voxels.config().spill_folder.c_str(), period, status.resumed_blocks,
+        map_->resumedLayerTiles(),
+        status.resumed_stamp.empty() ? "no checkpoint there, a new map"
+                                     : status.resumed_stamp.c_str());
     checkpoint_timer_ = getNodeHandle().createWallTimer(
         ros::WallDuration(period), [this](const ros::WallTimerEvent&) { checkpoint(); });
   }
@@ -134,7 +136,7 @@ class MapServer : public nodelet::Nodelet {
     const std::time_t now = std::time(nullptr);
     char stamp[64];
     std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-    const CheckpointResult result = map_->voxels().checkpoint(stamp);
+    const CheckpointResult result = map_->checkpoint(stamp);
     if (!result.written) {
       NODELET_WARN_THROTTLE(60.0, "checkpoint of map '%s' failed (mapping goes on): %s",
                             map_->name().c_str(), map_->voxels().spillStatus().last_error.c_str());

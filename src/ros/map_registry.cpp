@@ -31,7 +31,10 @@ SharedMapConfig readSharedMapConfig(const ParameterSource& source) {
 }
 
 SharedMap::SharedMap(const SharedMapConfig& config)
-    : config_(config), voxels_(config.voxels), layer_(config.layer()) {}
+    : config_(config),
+      voxels_(config.voxels),
+      layer_(config.layer()),
+      checkpoints_(&voxels_, &layer_) {}
 
 void SharedMap::reset() {
   {

@@ -215,7 +215,8 @@ class Checkpoints {
     }
     if (!quiet) {
       std::cerr << "offline_mapper: checkpoints to " << map.config().spill_folder << " every "
-                << period_ << " s; resumed " << status.resumed_blocks << " blocks"
+                << period_ << " s; resumed " << status.resumed_blocks << " blocks and "
+                << mapper_->resumedLayerTiles() << " laser layer tiles"
                 << (status.resumed_stamp.empty() ? " (no checkpoint there)"
                                                  : " of " + status.resumed_stamp)
                 << "\n";

@@ -81,8 +81,22 @@ class BlockStore {
     std::uint64_t count = 0;  // checkpoints written to this store, this one included
     std::string stamp;        // the writer's words, e.g. the time
   };
+  // A companion layer's records (the 2D laser layer's tiles: map_checkpoints.h) written with it,
+  // in a table of their own: all of them again (replace_all), or those changed since.
+  struct LayerRecord {
+    std::uint64_t key = 0;
+    std::vector<unsigned char> bytes;
+  };
+  struct LayerRecords {
+    std::vector<LayerRecord> records;
+    bool replace_all = false;
+  };
   void checkpoint(const std::vector<std::uint64_t>& keys, const BlockSource& block_at,
-                  const std::vector<std::uint64_t>& removed, const CheckpointInfo& info);
+                  const std::vector<std::uint64_t>& removed, const CheckpointInfo& info,
+                  const LayerRecords* layer = nullptr);
+  // The layer's records of the last checkpoint, in key order.
+  void forEachLayerRecord(
+      const std::function<void(std::uint64_t, const unsigned char*, std::size_t)>& fn) const;
   std::optional<CheckpointInfo> lastCheckpoint() const;
   // Flushes what was committed to the disk (commits are not flushed one by one, see above). May
   // run alongside reads and writes.
@@ -102,7 +116,7 @@ class BlockStore {
   void walk(MDB_txn* txn, const EntryFn& fn) const;  // the merged view, in key order
   int writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& keys,
                       const BlockSource& block_at, const std::vector<std::uint64_t>& removed,
-                      const CheckpointInfo& info);
+                      const CheckpointInfo& info, const LayerRecords* layer);
   [[noreturn]] void fail(const std::string& what, int code) const;
 
   BlockStoreConfig config_;
@@ -110,6 +124,7 @@ class BlockStore {
   MDB_env* env_ = nullptr;
   unsigned int blocks_dbi_ = 0;      // spilled since the last checkpoint
   unsigned int checkpoint_dbi_ = 0;  // the last checkpoint
+  unsigned int layer_dbi_ = 0;       // the companion layer's records of the last checkpoint
   std::shared_mutex remap_mutex_;    // growing the map (exclusive) vs sync() (shared)
   unsigned int meta_dbi_ = 0;
 };

@@ -122,6 +122,8 @@ class GridLayer2D {
   // saved layer resumes with. The raster's unknown cells leave the layer's cells as they are.
   // Throws std::invalid_argument for another resolution or a data size not width x height.
   void importRaster(const LogOddsRaster& raster);
+  // Replaces a whole tile's cells as they are (unclamped; NaN unknown): what a checkpoint resumes.
+  void restoreTile(const TileIndex& tile, const GridTile& cells);
   // As VoxelMap::clearBox: every known cell whose centre lies in [min, max] becomes free at the
   // lower clamping bound. Returns the number of cells changed.
   std::size_t clearBox(const Eigen::Vector2d& min, const Eigen::Vector2d& max);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "occupancy_fusion/map/block_change_log.h"
+#include "occupancy_fusion/map/block_store.h"
 #include "occupancy_fusion/map/occupancy_model.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/stored_block.h"
@@ -35,8 +36,6 @@ enum class BlockStorage {
   kDense,   // every block a VoxelBlock
   kHybrid,  // a block with few non-empty bricks keeps only those: less memory, a little more CPU
 };
-
-class BlockStore;
 
 struct VoxelMapConfig {
   double resolution = 0.05;          // m, edge of a voxel
@@ -92,6 +91,7 @@ struct CheckpointResult {
   bool written = false;            // false: no checkpoints, or the store failed (see spillStatus)
   std::size_t blocks_written = 0;  // blocks in memory written since the previous checkpoint
   std::size_t blocks_removed = 0;  // blocks the map lost since (left the checkpoint)
+  std::size_t layer_records = 0;   // a companion layer's records written with it
   double locked_seconds = 0.0;     // writers waited this long (the transaction)
   double sync_seconds = 0.0;       // then the flush to disk, writers not waiting
 };
@@ -195,7 +195,12 @@ class VoxelMap {
   void setFocus(const Eigen::Vector3d& sensor_origin);
   // See "Checkpoints". stamp: recorded with it (e.g. the time). Writers wait for the transaction
   // (cost: the blocks written since the previous checkpoint), not for the flush to disk.
-  CheckpointResult checkpoint(const std::string& stamp);
+  // `layer`: a companion layer's records, written in the same transaction (map_checkpoints.h).
+  CheckpointResult checkpoint(const std::string& stamp,
+                              const BlockStore::LayerRecords* layer = nullptr);
+  // The companion layer's records of the checkpoint this map resumed (nothing without one).
+  void forEachResumedLayerRecord(
+      const std::function<void(std::uint64_t, const unsigned char*, std::size_t)>& fn) const;
 
   // Iteration (under the shared lock). fn(voxel index, log-odds).
   using VoxelFn = std::function<void(const VoxelIndex&, float)>;

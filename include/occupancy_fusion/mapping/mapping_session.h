@@ -34,6 +34,7 @@
 #include "occupancy_fusion/integrators/stereo/visibility_stereo_integrator.h"
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/map_checkpoints.h"
 #include "occupancy_fusion/map/saved_map.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/mapping/frames.h"
@@ -158,8 +159,14 @@ class MappingSession : public FrameConsumer {
 
   const MappingSessionConfig& config() const { return config_; }
   const VoxelMap& map() const { return *voxels_; }
-  // A checkpoint of the map to its store (VoxelMapConfig::checkpoint_period), stamped `stamp`.
-  CheckpointResult checkpoint(const std::string& stamp) { return voxels_->checkpoint(stamp); }
+  // A checkpoint of the map and its laser layer to the map's store
+  // (VoxelMapConfig::checkpoint_period), stamped `stamp`; a session given its map and layer
+  // leaves checkpoints to their owner (written: false).
+  CheckpointResult checkpoint(const std::string& stamp) {
+    return checkpoints_ ? checkpoints_->checkpoint(stamp) : CheckpointResult();
+  }
+  // Laser layer tiles resumed from the store's checkpoint with the map.
+  std::size_t resumedLayerTiles() const { return checkpoints_ ? checkpoints_->resumedTiles() : 0; }
   // The 2D layer laser scans write (empty until a recording has scans); part of the fused view.
   const GridLayer2D& laserLayer() const { return *layer_; }
   // The fused 2D view over config().fused_grid's height band.
@@ -190,6 +197,7 @@ class MappingSession : public FrameConsumer {
   std::ostream* warnings_;
   std::unique_ptr<VoxelMap> own_voxels_;
   std::unique_ptr<GridLayer2D> own_layer_;
+  std::unique_ptr<MapCheckpoints> checkpoints_;  // when the session owns the map and layer
   VoxelMap* voxels_;
   GridLayer2D* layer_;
   // Made on the first frame of their kind: a nodelet's session maps one kind only.

@@ -15,6 +15,7 @@
 #include <ros/time.h>
 
 #include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/map_checkpoints.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/params/parameter_source.h"
 
@@ -49,6 +50,9 @@ class SharedMap {
   const GridLayer2D& layer() const { return layer_; }
 
   void reset();  // forgets everything: all voxels and cells unknown again
+  // A checkpoint of the voxels and the laser layer to the map's store (checkpoint_period).
+  CheckpointResult checkpoint(const std::string& stamp) { return checkpoints_.checkpoint(stamp); }
+  std::size_t resumedLayerTiles() const { return checkpoints_.resumedTiles(); }
 
   // A frame of `source` (its input topic) stamped `stamp` is in the map: called by a mapper after
   // the write. The map keeps the last kIntegratedLogSize of them, numbered in that order.
@@ -67,6 +71,7 @@ class SharedMap {
   SharedMapConfig config_;
   VoxelMap voxels_;
   GridLayer2D layer_;
+  MapCheckpoints checkpoints_;  // after voxels_ and layer_: restores the layer's resumed tiles
   mutable std::mutex integrated_mutex_;
   std::deque<IntegratedFrame> integrated_;  // the last kIntegratedLogSize frames noted
   std::uint64_t integrated_count_ = 0;

@@ -15,6 +15,7 @@
 #include <iterator>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -22,6 +23,7 @@
 
 #include "../../common/map_digest.h"
 #include "../../common/test_folder.h"
+#include "occupancy_fusion/map/map_checkpoints.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
@@ -193,6 +195,66 @@ TEST_F(VoxelMapCheckpoint, BlocksEvictedUnchangedAreNotWrittenAgain) {
   EXPECT_EQ(status.blocks_written, 0u);
   for (int b = 0; b < 30; ++b) EXPECT_FLOAT_EQ(*map.logOdds({b * VoxelBlock::kSide, 0, 0}), 0.8f);
   EXPECT_EQ(map.checkpoint("b").blocks_written, 30u);
+}
+
+// The laser layer's tiles go into the same checkpoint: a layer beside a resumed map gets the
+// checkpoint's cells back, and a checkpoint writes only the tiles changed since the previous one.
+TEST_F(VoxelMapCheckpoint, LaserLayerResumesWithTheMap) {
+  const std::string store = path("store");
+  VoxelMapConfig config = checkpointConfig(store, BlockStorage::kDense, 0);
+  GridLayer2DConfig layer_config;
+  layer_config.resolution = config.resolution;
+  // 300 cells from x = first, 7 apart; returns how many tiles they touch.
+  auto scan = [](GridLayer2D* layer, int first, float delta) {
+    std::vector<CellUpdate> updates;
+    std::set<std::pair<int, int>> tiles;
+    for (int i = 0; i < 300; ++i) {
+      const CellIndex cell(first + 7 * i, (i * 13) % 97 - 40);
+      updates.push_back({cell, delta});
+      const TileIndex tile = GridLayer2D::tileOf(cell);
+      tiles.insert({tile.x(), tile.y()});
+    }
+    layer->applyUpdates(updates);
+    return tiles.size();
+  };
+  LogOddsRaster at_checkpoint;
+  {
+    VoxelMap map(config);
+    GridLayer2D layer(layer_config);
+    MapCheckpoints checkpoints(&map, &layer);
+    EXPECT_EQ(checkpoints.resumedTiles(), 0u);
+    touchBlocks(&map, 0, 5, 0.8f);
+    const std::size_t first_tiles = scan(&layer, 0, 0.6f);
+    const CheckpointResult a = checkpoints.checkpoint("a");
+    ASSERT_TRUE(a.written);
+    EXPECT_EQ(a.layer_records, first_tiles);
+    const std::size_t second_tiles = scan(&layer, 3, -0.3f);  // most of them again
+    const CheckpointResult b = checkpoints.checkpoint("b");
+    ASSERT_TRUE(b.written);
+    EXPECT_EQ(b.layer_records, second_tiles);
+    EXPECT_EQ(b.blocks_written, 0u);
+    EXPECT_EQ(checkpoints.checkpoint("c").layer_records, 0u);
+    at_checkpoint = layer.toLogOddsRaster();
+    scan(&layer, 5000, 0.9f);  // after the last checkpoint: lost
+    EXPECT_GT(layer.tileCount(), 0u);
+  }
+  VoxelMap map(config);
+  GridLayer2D layer(layer_config);
+  const MapCheckpoints checkpoints(&map, &layer);
+  const LogOddsRaster resumed = layer.toLogOddsRaster();
+  EXPECT_GT(checkpoints.resumedTiles(), 10u);
+  EXPECT_EQ(resumed.origin_cell, at_checkpoint.origin_cell);
+  ASSERT_EQ(resumed.width, at_checkpoint.width);
+  ASSERT_EQ(resumed.height, at_checkpoint.height);
+  ASSERT_EQ(resumed.data.size(), at_checkpoint.data.size());
+  std::size_t known = 0;
+  for (std::size_t i = 0; i < resumed.data.size(); ++i) {
+    const float a = resumed.data[i], b = at_checkpoint.data[i];
+    ASSERT_TRUE((std::isnan(a) && std::isnan(b)) || a == b) << i;
+    known += !std::isnan(a);
+  }
+  EXPECT_EQ(known, 600u);  // both checkpointed scans' cells (x = 7 i and 7 i + 3: none shared)
+  EXPECT_EQ(map.blockCount(), 5u);
 }
 
 // Reads lines from the checkpoint writer's standard output.

@@ -103,8 +103,8 @@ TEST_F(OfflineResume, SecondPartResumedFromTheFirstEqualsTheWholeRecording) {
 }
 
 // The same through the checkpoint store (spill_folder, checkpoint_period): the first run's final
-// checkpoint is what the second run starts from, with a memory bound that keeps most of the map
-// in the store. The 2D laser layer is not checkpointed: only the voxels are compared.
+// checkpoint (voxels and laser layer) is what the second run starts from, with a memory bound
+// that keeps most of the map in the store.
 TEST_F(OfflineResume, SecondPartResumedFromTheCheckpointStoreEqualsTheWholeRecording) {
   const std::string store = " --set spill_folder=" + quoted(dir_ / "store") +
                             " --set checkpoint_period=3600 --set max_memory_mb=0.05";
@@ -118,6 +118,9 @@ TEST_F(OfflineResume, SecondPartResumedFromTheCheckpointStoreEqualsTheWholeRecor
   EXPECT_EQ(second.err.find("warning"), std::string::npos) << second.err;
   EXPECT_NE(bytes("first_store", ".ot"), bytes("whole_all", ".ot"));
   EXPECT_TRUE(bytes("second_store", ".ot") == bytes("whole_all", ".ot"));
+  EXPECT_NE(bytes("first_store", ".laser.npy"), bytes("whole_all", ".laser.npy"));
+  EXPECT_TRUE(bytes("second_store", ".laser.npy") == bytes("whole_all", ".laser.npy"));
+  EXPECT_TRUE(bytes("second_store", ".pgm") == bytes("whole_all", ".pgm"));
 }
 
 TEST_F(OfflineResume, FilesThatCannotBeResumedAreBadInput) {

@@ -1,0 +1,34 @@
+// Checkpoints of a map with its 2D laser layer (VoxelMapConfig::checkpoint_period): the voxels'
+// blocks and the layer's tiles changed since the previous checkpoint go into the map's store in
+// one transaction, so that the two resume together; a layer constructed beside a map that
+// resumed a checkpoint gets that checkpoint's tiles back.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/voxel_map.h"
+
+namespace occupancy_fusion {
+
+class MapCheckpoints {
+ public:
+  // Restores into `layer` the tiles of the checkpoint `voxels` resumed, if it resumed one. Throws
+  // std::runtime_error naming the store's folder for a damaged tile record.
+  MapCheckpoints(VoxelMap* voxels, GridLayer2D* layer);
+
+  // VoxelMap::checkpoint with the layer's tiles changed since the previous one (all of them at
+  // the first, or when the layer's change log no longer reaches back).
+  CheckpointResult checkpoint(const std::string& stamp);
+  std::size_t resumedTiles() const { return resumed_tiles_; }
+
+ private:
+  VoxelMap* voxels_;
+  GridLayer2D* layer_;
+  std::uint64_t layer_version_ = 0;  // the layer's version the last checkpoint holds
+  std::size_t resumed_tiles_ = 0;
+};
+
+}  // namespace occupancy_fusion
