@@ -6,7 +6,8 @@
 # byte, and draws spill_run.png (scripts/spill_run_plot.py). Writes into the output folder:
 # unbounded.csv, bounded.csv (per frame), unbounded.ot, bounded.ot, spill_run.txt, spill_run.png.
 # Usage: scripts/spill_long_run.sh [metres, default 300] [output folder, default
-#        ./output/spill_run] [resolution, default 0.05]
+#        ./output/spill_run] [resolution, default 0.05] [1: the camera comes back the same way,
+#        so that every block is written again (paged in from the store); default 0]
 # SPILL_BUILD_DIR=<catkin build folder> uses that build as it is (no install, no build step).
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -14,6 +15,7 @@ export PATH="/usr/bin:/bin:$PATH"
 length="${1:-300}"
 out="$(realpath -m "${2:-$root/output/spill_run}")"
 resolution="${3:-0.05}"
+comes_back="${4:-0}"
 if [[ -z "${SPILL_BUILD_DIR:-}" ]]; then
   "$root/scripts/install_dependencies.sh"
   "$root/scripts/build.sh"
@@ -24,12 +26,14 @@ mkdir -p "$out"
 rm -rf "$out/store"
 
 echo "spill run: $length m without a bound" >&2
-"$benchmark" spill --length "$length" --resolution "$resolution" --csv "$out/unbounded.csv" \
+"$benchmark" spill --length "$length" --resolution "$resolution" --return "$comes_back" \
+  --csv "$out/unbounded.csv" \
   --save "$out/unbounded" | tee "$out/unbounded.txt"
 map_mb=$(grep -o 'map_mb=[0-9.]*' "$out/unbounded.txt" | head -1 | cut -d= -f2)
 bound=$(python3 -c "print(round($map_mb / 4, 1))")
 echo "spill run: $length m with a bound of $bound MiB (a quarter of $map_mb MiB)" >&2
-"$benchmark" spill --length "$length" --resolution "$resolution" --bound_mb "$bound" \
+"$benchmark" spill --length "$length" --resolution "$resolution" --return "$comes_back" \
+  --bound_mb "$bound" \
   --spill_folder "$out/store" --csv "$out/bounded.csv" --save "$out/bounded" \
   | tee "$out/bounded.txt"
 if cmp -s "$out/unbounded.ot" "$out/bounded.ot"; then same="identical"; else same="DIFFERENT"; fi

@@ -40,17 +40,17 @@ def main():
     bound = float(sys.argv[3])
     figure, (memory, time) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     for rows, label, colour in ((unbounded, "no bound", "C0"), (bounded, "bound", "C1")):
-        x = column(rows, "x_m")
+        x = column(rows, "travelled_m")
         memory.plot(x, column(rows, "rss_anon_mb"), color=colour, label=label + ": resident (anonymous)")
         memory.plot(x, column(rows, "map_mb"), color=colour, linestyle=":", label=label + ": map's accounting")
         time.plot(x, moving_median(column(rows, "integrate_ms")), color=colour, label=label)
-    memory.plot(column(bounded, "x_m"), column(bounded, "rss_file_mb"), color="C2",
+    memory.plot(column(bounded, "travelled_m"), column(bounded, "rss_file_mb"), color="C2",
                 linestyle="--", label="bound: file-backed resident (libraries, then store pages)")
     memory.axhline(bound, color="grey", linewidth=0.8, label="bound %.0f MiB" % bound)
     memory.set_ylabel("MiB")
     memory.legend(fontsize=8, loc="upper left")
     time.set_ylabel("integration ms / frame\n(moving median of 201)")
-    time.set_xlabel("distance along the corridor (m)")
+    time.set_xlabel("distance travelled (m)")
     time.legend(fontsize=8)
     figure.tight_layout()
     figure.savefig(sys.argv[4], dpi=90)

@@ -353,11 +353,11 @@ const std::vector<Workload>& workloads() {
        runCheckpoint},
       {"spill",
        "[--length M] [--step S] [--resolution R] [--bound_mb B [--spill_folder F]]\n"
-       "      [--width W --height H] [--csv PATH] [--save PREFIX]\n"
+       "      [--return 1] [--width W --height H] [--csv PATH] [--save PREFIX]\n"
        "      a depth camera along M metres of corridor with a room every 8 m into a map with\n"
        "      or without a memory bound; per frame integration time and resident memory",
-       {"length", "step", "resolution", "bound_mb", "spill_folder", "width", "height", "csv",
-        "save"},
+       {"length", "step", "resolution", "bound_mb", "spill_folder", "return", "width", "height",
+        "csv", "save"},
        runSpill},
   };
   return table;

@@ -99,9 +99,10 @@ sim::Scene buildingAround(double x, double max_range) {
 }
 
 // The camera at metre x of the corridor, 1.2 m high, its view swinging 55 deg to either side
-// once per segment and tilted 8 deg down.
-Eigen::Isometry3d cameraAt(double x) {
-  const double yaw = 55.0 * M_PI / 180.0 * std::sin(2.0 * M_PI * x / kSegment);
+// once per segment and tilted 8 deg down; looking back along the corridor when `back`.
+Eigen::Isometry3d cameraAt(double x, bool back) {
+  const double yaw =
+      55.0 * M_PI / 180.0 * std::sin(2.0 * M_PI * x / kSegment) + (back ? M_PI : 0.0);
   const Eigen::Vector3d eye(x, 0.0, kCameraHeight);
   const Eigen::Vector3d view(std::cos(yaw), std::sin(yaw), -std::tan(8.0 * M_PI / 180.0));
   return sim::lookAt(eye, eye + view);
@@ -130,6 +131,9 @@ int runSpill(const CommandLine& args) {
   const double step = args.doubleValue("step", 0.1);
   const double resolution = args.doubleValue("resolution", 0.05);
   const double bound_mb = args.doubleValue("bound_mb", 0.0);
+  // --return 1: the camera comes back the way it went, looking back: every block it wrote on the
+  // way out is written again (paged in from the store under a bound).
+  const bool comes_back = args.intValue("return", 0) != 0;
   if (!(length > 0) || !(step > 0) || !(resolution > 0) || !(bound_mb >= 0)) {
     throw UsageError("--length, --step and --resolution must be positive, --bound_mb >= 0");
   }
@@ -158,23 +162,25 @@ int runSpill(const CommandLine& args) {
     csv = std::fopen(args.value("csv").c_str(), "w");
     if (csv == nullptr) throw UsageError("cannot write " + args.value("csv"));
     std::fprintf(csv,
-                 "frame,x_m,integrate_ms,rss_anon_mb,rss_file_mb,map_mb,blocks_in_memory,"
+                 "frame,travelled_m,integrate_ms,rss_anon_mb,rss_file_mb,map_mb,blocks_in_memory,"
                  "blocks_spilled\n");
   }
-  const int frames = static_cast<int>(length / step);
+  const int frames = static_cast<int>(length / step) * (comes_back ? 2 : 1);
   std::printf(
-      "# spill: %d frames, %.0f m at %.2f m a frame, %dx%d depth camera, %.3f m voxels, "
+      "# spill: %d frames, %.0f m%s at %.2f m a frame, %dx%d depth camera, %.3f m voxels, "
       "bound %.1f MiB%s, threads %d\n",
-      frames, length, step, camera.width, camera.height, resolution, bound_mb,
-      config.spill_folder.empty() ? "" : (", store " + config.spill_folder).c_str(),
+      frames, length, comes_back ? " and back" : "", step, camera.width, camera.height, resolution,
+      bound_mb, config.spill_folder.empty() ? "" : (", store " + config.spill_folder).c_str(),
       omp_get_max_threads());
   std::vector<double> times;
   double peak_anon = 0;
   auto last_progress = Clock::now();
   for (int frame = 0; frame < frames; ++frame) {
-    const double x = frame * step;
+    const double travelled = frame * step;
+    const bool back = travelled >= length;
+    const double x = back ? 2.0 * length - travelled : travelled;
     const sim::Scene scene = buildingAround(x, max_range + 1.0);
-    const Eigen::Isometry3d pose = cameraAt(x);
+    const Eigen::Isometry3d pose = cameraAt(x, back);
     const sim::DepthImage image = sim::renderDepth(scene, camera, pose, max_range);
     const DepthImageView view{image.width, image.height, image.depth.data(), 0};
     const auto start = Clock::now();
@@ -185,8 +191,8 @@ int runSpill(const CommandLine& args) {
     peak_anon = std::max(peak_anon, memory.anonymous_mb);
     const VoxelMap::StorageStats stats = map.storageStats();
     if (csv != nullptr) {
-      std::fprintf(csv, "%d,%.2f,%.3f,%.1f,%.1f,%.1f,%zu,%zu\n", frame, x, ms, memory.anonymous_mb,
-                   memory.file_mb, map.memoryBytes() / 1048576.0,
+      std::fprintf(csv, "%d,%.2f,%.3f,%.1f,%.1f,%.1f,%zu,%zu\n", frame, travelled, ms,
+                   memory.anonymous_mb, memory.file_mb, map.memoryBytes() / 1048576.0,
                    stats.dense_blocks + stats.sparse_blocks, stats.spilled_blocks);
     }
     if (millisecondsSince(last_progress) > 10000) {
