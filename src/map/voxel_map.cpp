@@ -172,8 +172,12 @@ std::optional<StoredBlock> VoxelMap::takeSpilled(std::uint64_t key) {
   if (spilled_.find(key) == spilled_.end()) return std::nullopt;
   VoxelBlock block;
   const bool read = readSpilled(key, &block);
+  return adoptSpilled(key, read ? &block : nullptr);
+}
+
+std::optional<StoredBlock> VoxelMap::adoptSpilled(std::uint64_t key, const VoxelBlock* block) {
   forgetSpilled(key);
-  if (!read) {
+  if (block == nullptr) {
     // Lost, as an evicted block is: consumers must forget what they derived from it.
     markRemoved(key);
     ++evicted_blocks_;
@@ -181,9 +185,31 @@ std::optional<StoredBlock> VoxelMap::takeSpilled(std::uint64_t key) {
   }
   ++blocks_paged_in_;
   StoredBlock stored = StoredBlock::newDense();
-  *stored.dense() = block;  // version 0: its first write in a call logs it
+  *stored.dense() = *block;  // version 0: its first write in a call logs it
   if (hybrid()) stored.settle(kMaxSparseBricks);
   return stored;
+}
+
+void VoxelMap::pageInSpilled(const std::vector<BlockIndex>& blocks) {
+  if (spilled_.empty()) return;
+  std::vector<std::uint64_t> keys;
+  for (const BlockIndex& block : blocks) {
+    const std::uint64_t key = packKey(block);
+    if (spilled_.find(key) != spilled_.end()) keys.push_back(key);
+  }
+  if (keys.size() < 2) return;  // storedForWrite reads a single one
+  // The store's reads run in parallel (LMDB read transactions); the table is changed serially.
+  const long count = static_cast<long>(keys.size());
+  std::vector<VoxelBlock> read(keys.size());
+  std::vector<char> found(keys.size());
+#pragma omp parallel for schedule(dynamic, 4)
+  for (long i = 0; i < count; ++i) found[i] = readSpilled(keys[i], &read[i]);
+  for (long i = 0; i < count; ++i) {
+    std::optional<StoredBlock> stored = adoptSpilled(keys[i], found[i] ? &read[i] : nullptr);
+    if (!stored) continue;
+    block_bytes_ += stored->bytes();
+    blocks_.emplace(keys[i], std::move(*stored));
+  }
 }
 
 void VoxelMap::pageInSpilledInRange(const BlockIndex& lo, const BlockIndex& hi) {
@@ -311,6 +337,7 @@ void VoxelMap::setLogOdds(const VoxelIndex& index, float log_odds) {
 void VoxelMap::updateBlocks(const std::vector<BlockIndex>& blocks,
                             const std::function<void(const BlockIndex&, VoxelBlock&)>& fn) {
   std::unique_lock<std::shared_mutex> lock(mutex_);
+  pageInSpilled(blocks);
   // Allocation changes the table, so it happens first and serially; the callbacks then only
   // touch their own block.
   const int count = static_cast<int>(blocks.size());

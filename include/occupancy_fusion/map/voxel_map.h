@@ -261,6 +261,11 @@ class VoxelMap {
   // A spilled block taken out of the store's index for the caller to insert into blocks_;
   // nullopt when the block is not spilled or cannot be read (then it is dropped).
   std::optional<StoredBlock> takeSpilled(std::uint64_t key);
+  // A spilled block read from the store (nullptr: it could not be read, and is dropped) taken out
+  // of the spilled index, for the caller to insert into blocks_.
+  std::optional<StoredBlock> adoptSpilled(std::uint64_t key, const VoxelBlock* block);
+  // The spilled ones of a write call's blocks, read from the store in parallel and put in memory.
+  void pageInSpilled(const std::vector<BlockIndex>& blocks);
   void forgetSpilled(std::uint64_t key);
   void pageInSpilledInRange(const BlockIndex& lo, const BlockIndex& hi);
   std::vector<std::uint64_t> farthestBlocksOverTarget() const;
