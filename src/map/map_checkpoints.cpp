@@ -1,6 +1,7 @@
 #include "occupancy_fusion/map/map_checkpoints.h"
 
 #include <cstring>
+#include <ctime>
 #include <stdexcept>
 #include <vector>
 
@@ -21,6 +22,15 @@ BlockStore::LayerRecord tileRecord(const TileIndex& index, const GridTile& tile)
 }
 
 }  // namespace
+
+std::string checkpointStampNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);  // the MapServer's timer thread and others: not std::gmtime's buffer
+  char stamp[32];
+  std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return stamp;
+}
 
 MapCheckpoints::MapCheckpoints(VoxelMap* voxels, GridLayer2D* layer)
     : voxels_(voxels), layer_(layer) {

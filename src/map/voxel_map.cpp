@@ -75,6 +75,8 @@ void VoxelMap::openStore() {
     block_bytes_ = 0;
     spilled_known_voxels_ = 0;
     resumed_blocks_ = 0;
+    resumed_stamp_.clear();
+    checkpoint_count_ = 0;
     recordStoreFailure(error);
   }
 }

@@ -3,7 +3,6 @@
 // (~save_on_shutdown), so that a restart loses nothing; with checkpoint_period and spill_folder
 // it checkpoints the map to its store that often (and once more when unloaded), and a map
 // created on that store resumed its last checkpoint.
-#include <ctime>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -133,9 +132,7 @@ class MapServer : public nodelet::Nodelet {
   }
 
   void checkpoint() {
-    const std::time_t now = std::time(nullptr);
-    char stamp[64];
-    std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    const std::string stamp = checkpointStampNow();
     const CheckpointResult result = map_->checkpoint(stamp);
     if (!result.written) {
       NODELET_WARN_THROTTLE(60.0, "checkpoint of map '%s' failed (mapping goes on): %s",
@@ -143,8 +140,8 @@ class MapServer : public nodelet::Nodelet {
       return;
     }
     NODELET_DEBUG("checkpoint %s: %zu blocks written, %zu removed, %.1f ms locked, %.1f ms sync",
-                  stamp, result.blocks_written, result.blocks_removed, 1e3 * result.locked_seconds,
-                  1e3 * result.sync_seconds);
+                  stamp.c_str(), result.blocks_written, result.blocks_removed,
+                  1e3 * result.locked_seconds, 1e3 * result.sync_seconds);
   }
 
   MapPersistenceConfig persistence_;

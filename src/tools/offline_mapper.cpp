@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -231,10 +230,7 @@ class Checkpoints {
   void now() {
     if (!(period_ > 0)) return;
     last_ = std::chrono::steady_clock::now();
-    const std::time_t wall = std::time(nullptr);
-    char stamp[64];
-    std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&wall));
-    if (!mapper_->checkpoint(stamp).written) {
+    if (!mapper_->checkpoint(checkpointStampNow()).written) {
       std::cerr << "offline_mapper: warning: checkpoint failed: "
                 << mapper_->map().spillStatus().last_error << "\n";
     }

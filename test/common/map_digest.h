@@ -10,6 +10,7 @@
 #include <string>
 
 #include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/sim/deterministic_random.h"
 
 namespace occupancy_fusion {
 
@@ -36,12 +37,6 @@ struct MapDigest {
   }
 };
 
-inline std::uint64_t mixBits(std::uint64_t x) {  // splitmix64's finaliser
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 inline MapDigest digestOf(const VoxelMap& map) {
   MapDigest digest;
   map.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
@@ -50,7 +45,7 @@ inline MapDigest digestOf(const VoxelMap& map) {
     const std::uint64_t position = (static_cast<std::uint64_t>(index.x() & 0xfffff) << 40) |
                                    (static_cast<std::uint64_t>(index.y() & 0xfffff) << 20) |
                                    static_cast<std::uint64_t>(index.z() & 0xfffff);
-    digest.sum += mixBits(mixBits(position) ^ bits);
+    digest.sum += sim::hashKey({position, bits});
     ++digest.voxels;
   });
   return digest;

@@ -13,6 +13,10 @@
 
 namespace occupancy_fusion {
 
+// The time now in UTC, ISO 8601 ("2026-12-02T22:29:57Z"): what the MapServer and offline_mapper
+// stamp their checkpoints with.
+std::string checkpointStampNow();
+
 class MapCheckpoints {
  public:
   // Restores into `layer` the tiles of the checkpoint `voxels` resumed, if it resumed one. Throws
