@@ -20,6 +20,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "occupancy_fusion/map/octomap_conversion.h"
+#include "occupancy_fusion/map/octree_files.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -83,14 +84,8 @@ std::string numberText(double value) {
 }
 
 std::size_t writeTree(const VoxelMap& map, const std::string& path, bool binary) {
-  std::size_t skipped = 0;
-  std::unique_ptr<octomap::OcTree> tree = toOcTree(map, &skipped);
-  writeFileAtomically(path, [&](std::ostream& out) {
-    // writeBinary converts the tree to maximum likelihood first, as octomap_server's .bt files.
-    const bool ok = binary ? tree->writeBinary(out) : tree->write(out);
-    if (!ok) throw std::runtime_error("liboctomap failed to serialise the tree");
-  });
-  return skipped;
+  const OctreeFilePaths paths{binary ? "" : path, binary ? path : ""};
+  return writeOctreeFiles(blockSourceOf(map), map.resolution(), map.model(), paths).skipped_voxels;
 }
 
 // Makes a file's data, or a folder's entries, durable: without it a power cut shortly after a

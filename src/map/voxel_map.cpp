@@ -720,6 +720,15 @@ std::size_t VoxelMap::blockCount() const {
   return blocks_.size() + spilled_.size();
 }
 
+std::vector<BlockIndex> VoxelMap::blockIndices() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::vector<BlockIndex> indices;
+  indices.reserve(blocks_.size() + spilled_.size());
+  for (const auto& entry : blocks_) indices.push_back(unpackKey3(entry.first));
+  for (const auto& entry : spilled_) indices.push_back(unpackKey3(entry.first));
+  return indices;
+}
+
 std::size_t VoxelMap::knownVoxelCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   std::size_t count = 0;

@@ -9,7 +9,7 @@
 
 #include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_files.h"
-#include "occupancy_fusion/map/octomap_conversion.h"
+#include "occupancy_fusion/map/octree_files.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -39,8 +39,6 @@ SavedMapFiles saveMap(const VoxelMap& voxels, const GridLayer2D& layer, const st
                       const MapReadTimer& timer) {
   // Every read before the first file is touched: a map that cannot be saved leaves the previous
   // files of this prefix as they were.
-  const std::vector<VoxelMap::BlockCopy> blocks =
-      timed(timer, "~save_map block copy", [&] { return voxels.copyBlocks(); });
   FusedGridView view(options.band);
   const OccupancyRaster raster =
       timed(timer, "~save_map 2D view", [&] { return view.update(voxels, &layer); });
@@ -53,22 +51,15 @@ SavedMapFiles saveMap(const VoxelMap& voxels, const GridLayer2D& layer, const st
         prefix + " kept");
   }
   SavedMapFiles saved;
-  // The tree is built without the map's lock.
-  const std::unique_ptr<octomap::OcTree> tree =
-      toOcTree(blocks, voxels.resolution(), voxels.model(), &saved.octomap_skipped_voxels);
-  const std::string ot_path = prefix + ".ot";
-  writeFileAtomically(ot_path, [&](std::ostream& out) {
-    if (!tree->write(out)) throw std::runtime_error("liboctomap failed to serialise the tree");
-  });
-  written->push_back(ot_path);
-  const std::string bt_path = prefix + ".bt";
-  writeFileAtomically(bt_path, [&](std::ostream& out) {
-    // writeBinary prunes the tree to maximum likelihood, which is why the .ot is written first.
-    if (!tree->writeBinary(out)) {
-      throw std::runtime_error("liboctomap failed to serialise the tree");
-    }
-  });
-  written->push_back(bt_path);
+  // The blocks are read one at a time (each under the map's shared lock for a microsecond, so
+  // not reported to the timer, or from its spill store): a map larger than memory is saved
+  // without holding it.
+  const OctreeFilePaths paths{prefix + ".ot", prefix + ".bt"};
+  saved.octomap_skipped_voxels =
+      writeOctreeFiles(blockSourceOf(voxels), voxels.resolution(), voxels.model(), paths)
+          .skipped_voxels;
+  written->push_back(paths.ot);
+  written->push_back(paths.bt);
   if (!raster.empty()) {
     saved.grid_width = raster.width;
     saved.grid_height = raster.height;

@@ -18,9 +18,10 @@ namespace occupancy_fusion {
 // Calls write(stream) on a temporary file beside `path`, then renames it to `path`.
 void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 
-// OctoMap files of the map (see toOcTree). .bt holds labels only (occupied / free, pruned to
-// maximum likelihood); .ot holds every log-odds. Return the number of voxels skipped because they
-// lie outside OctoMap's 16-bit key range.
+// OctoMap files of the map: the bytes liboctomap writes for toOcTree's tree, streamed from the
+// blocks one at a time (octree_files.h), so also for a map larger than memory. .bt holds labels
+// only (occupied / free, pruned to maximum likelihood); .ot holds every log-odds. Return the
+// number of voxels skipped because they lie outside OctoMap's 16-bit key range.
 std::size_t writeBt(const VoxelMap& map, const std::string& path);
 std::size_t writeOt(const VoxelMap& map, const std::string& path);
 

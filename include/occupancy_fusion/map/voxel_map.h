@@ -225,6 +225,7 @@ class VoxelMap {
 
   // Accounting.
   std::size_t blockCount() const;  // in memory and spilled
+  std::vector<BlockIndex> blockIndices() const;  // every block, in memory and spilled
   std::size_t knownVoxelCount() const;
   std::size_t memoryBytes() const;  // blocks, hash table, change log and spilled blocks' index
   std::size_t evictedBlockCount() const;  // blocks dropped (their voxels unknown again)

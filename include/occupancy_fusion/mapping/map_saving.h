@@ -34,10 +34,13 @@ using MapReadTimer = std::function<void(const char* what, double milliseconds)>;
 // (occupied / free labels, for OctoMap tools), when the fused 2D view has cells <prefix>.pgm +
 // <prefix>.yaml (map_server's format), and <prefix>.laser.npy + <prefix>.laser.yaml (the 2D
 // laser layer's log-odds, which load_map resumes with the .ot; layer_files.h); with
-// options.inspection_files also the .pcd and, with a 2D view, the .npy and .png. The map is read
-// (one block copy, the 2D view, the layer) before the first file is written, and every file is
-// written atomically (temporary file, then rename), so each file on disk is either its previous
-// version or the complete new one; safe while mappers write. A map with nothing known (no voxel, no
+// options.inspection_files also the .pcd and, with a 2D view, the .npy and .png. The 2D view and
+// the layer are read before the first file is written; the blocks are read one at a time, each
+// under the map's shared lock (or from its spill store), into scratch files from which the .ot and
+// .bt are both written (octree_files.h), so that the memory does not grow with the map; a save
+// while mappers write holds each block as it was when read. Every file is written atomically
+// (temporary file, then rename), so each file on disk is either its previous version or the
+// complete new one. A map with nothing known (no voxel, no
 // layer cell) is not saved: std::runtime_error, and the previous files of the prefix are kept.
 // Throws std::runtime_error naming the path of a file that cannot be written; the files completed
 // before a failure are appended to *written, in the order above.
