@@ -3,7 +3,8 @@
 # depth camera along a corridor with a room every 8 m): first without a bound, then with a bound
 # of a quarter of what that map needed and a spill store. Reports the peak resident memory and
 # the integration time per frame of both, whether the two saved .ot files are identical byte for
-# byte, and draws spill_run.png (scripts/spill_run_plot.py). Writes into the output folder:
+# byte, the time and peak memory of saving (streamed, and through liboctomap's OcTree for
+# comparison), and draws spill_run.png (scripts/spill_run_plot.py). Writes into the output folder:
 # unbounded.csv, bounded.csv (per frame), unbounded.ot, bounded.ot, spill_run.txt, spill_run.png.
 # Usage: scripts/spill_long_run.sh [metres, default 300] [output folder, default
 #        ./output/spill_run] [resolution, default 0.05] [1: the camera comes back the same way,
@@ -27,14 +28,14 @@ rm -rf "$out/store"
 
 echo "spill run: $length m without a bound" >&2
 "$benchmark" spill --length "$length" --resolution "$resolution" --return "$comes_back" \
-  --csv "$out/unbounded.csv" \
+  --csv "$out/unbounded.csv" --save_liboctomap 1 \
   --save "$out/unbounded" | tee "$out/unbounded.txt"
 map_mb=$(grep -o 'map_mb=[0-9.]*' "$out/unbounded.txt" | head -1 | cut -d= -f2)
 bound=$(python3 -c "print(round($map_mb / 4, 1))")
 echo "spill run: $length m with a bound of $bound MiB (a quarter of $map_mb MiB)" >&2
 "$benchmark" spill --length "$length" --resolution "$resolution" --return "$comes_back" \
   --bound_mb "$bound" \
-  --spill_folder "$out/store" --csv "$out/bounded.csv" --save "$out/bounded" \
+  --spill_folder "$out/store" --csv "$out/bounded.csv" --save "$out/bounded" --save_liboctomap 1 \
   | tee "$out/bounded.txt"
 if cmp -s "$out/unbounded.ot" "$out/bounded.ot"; then same="identical"; else same="DIFFERENT"; fi
 {

@@ -353,11 +353,12 @@ const std::vector<Workload>& workloads() {
        runCheckpoint},
       {"spill",
        "[--length M] [--step S] [--resolution R] [--bound_mb B [--spill_folder F]]\n"
-       "      [--return 1] [--width W --height H] [--csv PATH] [--save PREFIX]\n"
+       "      [--return 1] [--width W --height H] [--csv PATH] [--save PREFIX [--save_liboctomap 1]]\n"
        "      a depth camera along M metres of corridor with a room every 8 m into a map with\n"
-       "      or without a memory bound; per frame integration time and resident memory",
+       "      or without a memory bound; per frame integration time and resident memory; the\n"
+       "      save's time and peak memory (streamed; and through liboctomap's OcTree)",
        {"length", "step", "resolution", "bound_mb", "spill_folder", "return", "width", "height",
-        "csv", "save"},
+        "csv", "save", "save_liboctomap"},
        runSpill},
   };
   return table;

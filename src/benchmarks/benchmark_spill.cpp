@@ -5,12 +5,19 @@
 // --spill_folder: evicted blocks spill to the store). Per frame (--csv): the integration time,
 // the process's resident memory (anonymous, and file-backed: LMDB's mapped pages, which the
 // system can drop), the map's own accounting and its blocks in memory and in the store. At the
-// end the map is saved (--save PREFIX: PREFIX.ot), so that a bounded run and an unbounded one
-// can be compared byte for byte. The building is generated per frame around the camera
+// end the map is saved (--save PREFIX: PREFIX.ot, streamed from the blocks; with
+// --save_liboctomap 1 also through liboctomap's OcTree, for comparison), so that a bounded run and
+// an unbounded one can be compared byte for byte, and the save's peak memory is reported. The building is generated per frame around the camera
 // (segments near it only), so rendering costs the same at the first metre and the thousandth.
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
+#include <thread>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -21,6 +28,7 @@
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
 #include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
 #include "occupancy_fusion/map/map_files.h"
+#include "occupancy_fusion/map/octomap_conversion.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/scene.h"
@@ -124,6 +132,60 @@ ResidentMemory residentMemory() {
   return memory;
 }
 
+// The largest anonymous resident memory while `work` runs, sampled every 5 ms on a thread of its
+// own (the process's high-water mark would hold the run's peak, not the save's).
+template <typename Work>
+double peakAnonymousMbDuring(Work work) {
+  std::atomic<bool> done{false};
+  double peak = residentMemory().anonymous_mb;
+  std::thread sampler([&] {
+    while (!done.load()) {
+      peak = std::max(peak, residentMemory().anonymous_mb);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  });
+  try {
+    work();
+  } catch (...) {
+    done = true;
+    sampler.join();
+    throw;
+  }
+  done = true;
+  sampler.join();
+  return std::max(peak, residentMemory().anonymous_mb);
+}
+
+// PREFIX.ot streamed from the blocks (what ~save_map and offline_mapper do), and with
+// --save_liboctomap 1 also PREFIX.liboctomap.ot through liboctomap's OcTree (toOcTree, write),
+// for the time and memory of both and whether their bytes agree.
+void saveAndMeasure(const VoxelMap& map, const std::string& prefix, bool liboctomap_too) {
+  const double before = residentMemory().anonymous_mb;
+  auto start = Clock::now();
+  const double streamed_peak = peakAnonymousMbDuring([&] { writeOt(map, prefix + ".ot"); });
+  const double streamed_s = millisecondsSince(start) / 1000.0;
+  std::printf(
+      "saved %s.ot (streamed) in %.1f s, resident (anonymous) before %.1f MiB, peak during the "
+      "save %.1f MiB\n",
+      prefix.c_str(), streamed_s, before, streamed_peak);
+  if (!liboctomap_too) return;
+  start = Clock::now();
+  const double tree_peak = peakAnonymousMbDuring([&] {
+    const std::unique_ptr<octomap::OcTree> tree = toOcTree(map);
+    std::ofstream out(prefix + ".liboctomap.ot", std::ios::binary);
+    if (!tree->write(out)) throw std::runtime_error("liboctomap could not write the tree");
+  });
+  const double tree_s = millisecondsSince(start) / 1000.0;
+  std::ifstream a(prefix + ".ot", std::ios::binary), b(prefix + ".liboctomap.ot", std::ios::binary);
+  const bool same = std::equal(std::istreambuf_iterator<char>(a), std::istreambuf_iterator<char>(),
+                               std::istreambuf_iterator<char>(b), std::istreambuf_iterator<char>());
+  std::printf(
+      "saved %s.liboctomap.ot (liboctomap OcTree) in %.1f s, peak during the save %.1f MiB; "
+      "streamed / liboctomap: time %.2f, peak memory above the map %.3f; bytes %s\n",
+      prefix.c_str(), tree_s, tree_peak, streamed_s / tree_s,
+      (streamed_peak - before) / std::max(tree_peak - before, 1e-9), same ? "equal" : "DIFFERENT");
+}
+
 }  // namespace
 
 int runSpill(const CommandLine& args) {
@@ -217,11 +279,7 @@ int runSpill(const CommandLine& args) {
       map.memoryBytes() / 1048576.0, map.blockCount(), status.spilled_blocks, status.blocks_written,
       status.blocks_paged_in, status.failures, map.evictedBlockCount(), map.knownVoxelCount());
   if (args.has("save")) {
-    const auto start = Clock::now();
-    writeOt(map, args.value("save") + ".ot");
-    std::printf("saved %s.ot in %.1f s, peak resident (anonymous) after the save %.1f MiB\n",
-                args.value("save").c_str(), millisecondsSince(start) / 1000.0,
-                residentMemory().anonymous_mb);
+    saveAndMeasure(map, args.value("save"), args.intValue("save_liboctomap", 0) != 0);
   }
   return 0;
 }
