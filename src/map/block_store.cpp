@@ -24,7 +24,8 @@ namespace {
 
 constexpr char kBlocksTable[] = "blocks";  // spilled since the last checkpoint
 constexpr char kCheckpointTable[] = "checkpoint";
-constexpr char kLayerTable[] = "layer_checkpoint";  // a companion layer's records
+constexpr char kLayerTable[] = "layer_checkpoint";      // a companion layer's records
+constexpr char kLayerSpilledTable[] = "layer_spilled";  // its records spilled since
 constexpr char kMetaTable[] = "meta";
 constexpr char kCheckpointCountKey[] = "checkpoint_count";
 constexpr char kCheckpointStampKey[] = "checkpoint_stamp";
@@ -108,6 +109,19 @@ std::optional<std::string> readText(MDB_txn* txn, MDB_dbi dbi, const char* key) 
   return std::string(static_cast<const char*>(value.mv_data), value.mv_size);
 }
 
+// Every entry of table `from` put into `to` (replacing entries of the same key).
+int copyTable(MDB_txn* txn, MDB_dbi from, MDB_dbi to) {
+  Cursor cursor(txn, from);
+  if (cursor.openCode() != MDB_SUCCESS) return cursor.openCode();
+  MDB_val name, value;
+  int code = mdb_cursor_get(cursor.get(), &name, &value, MDB_FIRST);
+  for (; code == MDB_SUCCESS; code = mdb_cursor_get(cursor.get(), &name, &value, MDB_NEXT)) {
+    code = mdb_put(txn, to, &name, &value, 0);
+    if (code != MDB_SUCCESS) return code;
+  }
+  return code == MDB_NOTFOUND ? MDB_SUCCESS : code;
+}
+
 }  // namespace
 
 BlockStore::BlockStore(const BlockStoreConfig& config) : config_(config) {
@@ -166,7 +180,7 @@ void BlockStore::open() {
   if (code != MDB_SUCCESS) fail("cannot create an LMDB environment", code);
   std::size_t initial = config_.initial_bytes;
   if (config_.max_bytes != 0 && initial > config_.max_bytes) initial = config_.max_bytes;
-  code = mdb_env_set_maxdbs(env_, 4);
+  code = mdb_env_set_maxdbs(env_, 5);
   if (code == MDB_SUCCESS) code = mdb_env_set_mapsize(env_, initial);
   // MDB_NOTLS: a read transaction is not tied to its thread, so reads can nest (a forEach
   // callback reading a voxel).
@@ -190,6 +204,9 @@ void BlockStore::checkOrWriteMetadata() {
     code = mdb_dbi_open(txn.get(), kCheckpointTable, MDB_CREATE, &checkpoint_dbi_);
   }
   if (code == MDB_SUCCESS) code = mdb_dbi_open(txn.get(), kLayerTable, MDB_CREATE, &layer_dbi_);
+  if (code == MDB_SUCCESS) {
+    code = mdb_dbi_open(txn.get(), kLayerSpilledTable, MDB_CREATE, &layer_spilled_dbi_);
+  }
   if (code != MDB_SUCCESS)
     fail("not a block store, or a damaged one: its tables do not open", code);
   const std::optional<std::string> format = readText(txn.get(), meta_dbi_, kFormatKey);
@@ -359,6 +376,7 @@ void BlockStore::drop(bool checkpoint_too) {
   Transaction txn(env_, 0);
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot write", txn.beginCode());
   int code = mdb_drop(txn.get(), blocks_dbi_, 0);
+  if (code == MDB_SUCCESS) code = mdb_drop(txn.get(), layer_spilled_dbi_, 0);
   if (code == MDB_SUCCESS && checkpoint_too) code = mdb_drop(txn.get(), checkpoint_dbi_, 0);
   if (code == MDB_SUCCESS && checkpoint_too) code = mdb_drop(txn.get(), layer_dbi_, 0);
   if (code == MDB_SUCCESS && checkpoint_too) {
@@ -378,19 +396,8 @@ int BlockStore::writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& 
                                 const std::vector<std::uint64_t>& removed,
                                 const CheckpointInfo& info, const LayerRecords* layer) {
   // 1. The blocks spilled since the last checkpoint join it (spilled blocks are the map's newest).
-  int code = MDB_SUCCESS;
-  {
-    Cursor spilled(txn, blocks_dbi_);
-    if (spilled.openCode() != MDB_SUCCESS) return spilled.openCode();
-    MDB_val name, value;
-    code = mdb_cursor_get(spilled.get(), &name, &value, MDB_FIRST);
-    for (; code == MDB_SUCCESS; code = mdb_cursor_get(spilled.get(), &name, &value, MDB_NEXT)) {
-      code = mdb_put(txn, checkpoint_dbi_, &name, &value, 0);
-      if (code != MDB_SUCCESS) return code;
-    }
-    if (code != MDB_NOTFOUND) return code;
-  }
-  code = mdb_drop(txn, blocks_dbi_, 0);
+  int code = copyTable(txn, blocks_dbi_, checkpoint_dbi_);
+  if (code == MDB_SUCCESS) code = mdb_drop(txn, blocks_dbi_, 0);
   // 2. The blocks in memory written since, over them.
   std::vector<unsigned char> encoded;
   for (std::size_t i = 0; i < keys.size() && code == MDB_SUCCESS; ++i) {
@@ -407,10 +414,14 @@ int BlockStore::writeCheckpoint(MDB_txn* txn, const std::vector<std::uint64_t>& 
     code = mdb_del(txn, checkpoint_dbi_, &name, nullptr);
     if (code == MDB_NOTFOUND) code = MDB_SUCCESS;
   }
-  // 4. The companion layer's records.
-  if (layer != nullptr && layer->replace_all && code == MDB_SUCCESS) {
+  // 4. The companion layer's records: those it spilled since join the checkpoint (unless all are
+  //    written again), then the records written since over them.
+  if (code == MDB_SUCCESS && layer != nullptr && layer->replace_all) {
     code = mdb_drop(txn, layer_dbi_, 0);
+  } else if (code == MDB_SUCCESS) {
+    code = copyTable(txn, layer_spilled_dbi_, layer_dbi_);
   }
+  if (code == MDB_SUCCESS) code = mdb_drop(txn, layer_spilled_dbi_, 0);
   for (std::size_t i = 0; layer != nullptr && i < layer->records.size() && code == MDB_SUCCESS;
        ++i) {
     const LayerRecord& record = layer->records[i];
@@ -461,6 +472,46 @@ void BlockStore::forEachLayerRecord(
     fn(KeyBytes::decode(name), static_cast<const unsigned char*>(value.mv_data), value.mv_size);
   }
   if (code != MDB_NOTFOUND) fail("cannot read the layer", code);
+}
+
+void BlockStore::putLayer(const std::vector<LayerRecord>& records) {
+  for (;;) {
+    const std::size_t limit = sizeLimit();
+    Transaction txn(env_, 0);
+    if (txn.beginCode() != MDB_SUCCESS) fail("cannot write", txn.beginCode());
+    int code = MDB_SUCCESS;
+    for (std::size_t i = 0; i < records.size() && code == MDB_SUCCESS; ++i) {
+      KeyBytes key(records[i].key);
+      MDB_val name = key.value();
+      MDB_val value{records[i].bytes.size(), const_cast<unsigned char*>(records[i].bytes.data())};
+      code = mdb_put(txn.get(), layer_spilled_dbi_, &name, &value, 0);
+    }
+    if (code == MDB_SUCCESS) code = txn.commit();
+    if (code == MDB_MAP_FULL) {
+      txn.abort();
+      grow(limit);
+      continue;
+    }
+    if (code != MDB_SUCCESS) {
+      fail("cannot write " + std::to_string(records.size()) + " layer records", code);
+    }
+    return;
+  }
+}
+
+bool BlockStore::getLayer(std::uint64_t key, std::vector<unsigned char>* bytes) const {
+  Transaction txn(env_, MDB_RDONLY);
+  if (txn.beginCode() != MDB_SUCCESS) fail("cannot read", txn.beginCode());
+  KeyBytes key_bytes(key);
+  MDB_val name = key_bytes.value();
+  MDB_val value;
+  int code = mdb_get(txn.get(), layer_spilled_dbi_, &name, &value);
+  if (code == MDB_NOTFOUND) code = mdb_get(txn.get(), layer_dbi_, &name, &value);
+  if (code == MDB_NOTFOUND) return false;
+  if (code != MDB_SUCCESS) fail("cannot read layer record " + std::to_string(key), code);
+  const auto* first = static_cast<const unsigned char*>(value.mv_data);
+  bytes->assign(first, first + value.mv_size);
+  return true;
 }
 
 std::optional<BlockStore::CheckpointInfo> BlockStore::lastCheckpoint() const {

@@ -67,10 +67,41 @@ void GridLayer2D::markWritten(std::uint64_t key, GridTile* tile) {
   change_log_.recordChange(version_, key);
 }
 
+const GridTile* GridLayer2D::readTile(std::uint64_t key, GridTile* scratch) const {
+  const auto it = tiles_.find(key);
+  if (it != tiles_.end()) return it->second.get();
+  if (stored_.find(key) == stored_.end()) return nullptr;
+  if (store_->get(key, scratch)) return scratch;
+  ++store_failures_;
+  return nullptr;  // unreadable: unknown, as a tile the layer never had
+}
+
+void GridLayer2D::forEachTileLocked(const TileFn& fn) const {
+  for (const auto& [key, tile] : tiles_) fn(unpackKey2(key), *tile);
+  GridTile scratch;
+  for (const auto& entry : stored_) {
+    const GridTile* tile = readTile(entry.first, &scratch);
+    if (tile != nullptr) fn(unpackKey2(entry.first), *tile);
+  }
+}
+
 GridTile& GridLayer2D::tileForWrite(const TileIndex& tile) {
   const std::uint64_t key = packKey(tile);
   auto it = tiles_.find(key);
-  if (it == tiles_.end()) it = tiles_.emplace(key, std::make_unique<GridTile>()).first;
+  if (it == tiles_.end()) {
+    auto fresh = std::make_unique<GridTile>();
+    const auto stored = stored_.find(key);
+    if (stored != stored_.end()) {
+      stored_.erase(stored);
+      if (store_->get(key, fresh.get())) {
+        ++tiles_paged_in_;
+      } else {
+        ++store_failures_;
+        *fresh = GridTile();
+      }
+    }
+    it = tiles_.emplace(key, std::move(fresh)).first;
+  }
   GridTile* found = it->second.get();
   markWritten(key, found);
   return *found;
@@ -79,11 +110,86 @@ GridTile& GridLayer2D::tileForWrite(const TileIndex& tile) {
 void GridLayer2D::finishWrite() {
   change_log_.finishWrite();
   ++version_;
+  enforceBound();
+}
+
+void GridLayer2D::enforceBound() {
+  const std::size_t bound = config_.max_memory_bytes;
+  if (store_ == nullptr || bound == 0 || tiles_.size() * sizeof(GridTile) <= bound) return;
+  // Down to 90 % of the bound, so that the next writes do not spill at once again; the tiles
+  // farthest from the last write first.
+  const std::size_t keep = bound / 10 * 9 / sizeof(GridTile);
+  std::vector<std::pair<std::int64_t, std::uint64_t>> by_distance;
+  by_distance.reserve(tiles_.size());
+  const TileIndex focus = tileOf(focus_);
+  for (const auto& entry : tiles_) {
+    const Eigen::Matrix<std::int64_t, 2, 1> offset =
+        (unpackKey2(entry.first) - focus).cast<std::int64_t>();
+    by_distance.emplace_back(offset.squaredNorm(), entry.first);
+  }
+  const std::size_t leaving = tiles_.size() - std::min(keep, tiles_.size());
+  std::nth_element(by_distance.begin(), by_distance.begin() + leaving, by_distance.end(),
+                   [](const auto& a, const auto& b) { return a > b; });
+  std::vector<std::pair<std::uint64_t, const GridTile*>> out;
+  out.reserve(leaving);
+  for (std::size_t i = 0; i < leaving; ++i) {
+    const std::uint64_t key = by_distance[i].second;
+    out.emplace_back(key, tiles_.find(key)->second.get());
+  }
+  if (!store_->put(out)) {
+    ++store_failures_;  // the tiles stay: nothing is lost, the bound is exceeded
+    return;
+  }
+  for (const auto& [key, tile] : out) {
+    stored_[key] = tile->known_count;
+    tiles_.erase(key);
+  }
+  tiles_written_ += out.size();
+}
+
+void GridLayer2D::setTileStore(std::unique_ptr<TileStore> store) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  store_ = std::move(store);
+  enforceBound();
+}
+
+TileSpillStatus GridLayer2D::spillStatus() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  TileSpillStatus status;
+  status.enabled = store_ != nullptr && config_.max_memory_bytes > 0;
+  status.spilled_tiles = stored_.size();
+  status.tiles_written = tiles_written_;
+  status.tiles_paged_in = tiles_paged_in_;
+  status.failures = store_failures_;
+  return status;
+}
+
+GridChanges GridLayer2D::visitChangedTiles(
+    std::uint64_t version, const TileFn& tile,
+    const std::function<void(const GridChanges&)>& commit) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  GridChanges changes;
+  changes.version = version_;
+  std::vector<std::uint64_t> changed;
+  if (!change_log_.collectSince(version, &changed, nullptr)) {
+    changes.full_rebuild = true;
+    forEachTileLocked(tile);
+  } else {
+    GridTile scratch;
+    for (std::uint64_t key : changed) {
+      const GridTile* found = readTile(key, &scratch);
+      if (found != nullptr) tile(unpackKey2(key), *found);
+      changes.changed.push_back(unpackKey2(key));
+    }
+  }
+  commit(changes);
+  return changes;
 }
 
 std::optional<float> GridLayer2D::logOdds(const CellIndex& index) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  const GridTile* tile = findTile(tileOf(index));
+  GridTile scratch;
+  const GridTile* tile = readTile(packKey(tileOf(index)), &scratch);
   if (tile == nullptr) return std::nullopt;
   const float value = tile->log_odds[linearIndexInTile(index)];
   if (!GridTile::isKnown(value)) return std::nullopt;
@@ -97,6 +203,7 @@ Occupancy GridLayer2D::occupancy(const CellIndex& index) const {
 
 void GridLayer2D::updateCell(const CellIndex& index, float delta) {
   std::unique_lock<std::shared_mutex> lock(mutex_);
+  focus_ = index;
   tileForWrite(tileOf(index)).update(linearIndexInTile(index), delta, min_log_odds_, max_log_odds_);
   finishWrite();
 }
@@ -113,6 +220,7 @@ void GridLayer2D::applyUpdates(const std::vector<CellUpdate>& updates) {
     }
     tile->update(linearIndexInTile(update.index), update.delta, min_log_odds_, max_log_odds_);
   }
+  if (!updates.empty()) focus_ = updates.back().index;
   finishWrite();
 }
 
@@ -122,6 +230,7 @@ void GridLayer2D::addRaster(const CellIndex& origin_cell, int width, int height,
     throw std::invalid_argument("GridLayer2D::addRaster: negative window size");
   }
   std::unique_lock<std::shared_mutex> lock(mutex_);
+  focus_ = origin_cell + CellIndex(width / 2, height / 2);
   forEachWindowValue(origin_cell, width, height, log_odds_delta,
                      [this](GridTile* tile, int linear, float delta) {
                        tile->update(linear, delta, min_log_odds_, max_log_odds_);
@@ -149,6 +258,7 @@ void GridLayer2D::importRaster(const LogOddsRaster& raster) {
     throw std::invalid_argument("GridLayer2D::importRaster: data size does not match the window");
   }
   std::unique_lock<std::shared_mutex> lock(mutex_);
+  focus_ = raster.origin_cell + CellIndex(raster.width / 2, raster.height / 2);
   forEachWindowValue(raster.origin_cell, raster.width, raster.height, raster.data.data(),
                      [](GridTile* tile, int linear, float value) { tile->set(linear, value); });
   finishWrite();
@@ -183,6 +293,7 @@ void GridLayer2D::forEachWindowValue(const CellIndex& origin_cell, int width, in
 
 void GridLayer2D::setLogOdds(const CellIndex& index, float log_odds) {
   std::unique_lock<std::shared_mutex> lock(mutex_);
+  focus_ = index;
   tileForWrite(tileOf(index)).set(linearIndexInTile(index), log_odds);
   finishWrite();
 }
@@ -191,6 +302,15 @@ std::size_t GridLayer2D::clearBox(const Eigen::Vector2d& min, const Eigen::Vecto
   std::unique_lock<std::shared_mutex> lock(mutex_);
   const TileIndex tile_lo = tileOf(indexOf(min));
   const TileIndex tile_hi = tileOf(indexOf(max));
+  auto in_range = [&](const TileIndex& tile) {
+    return (tile.array() >= tile_lo.array()).all() && (tile.array() <= tile_hi.array()).all();
+  };
+  std::vector<TileIndex> stored_in_range;
+  for (const auto& entry : stored_) {
+    if (in_range(unpackKey2(entry.first))) stored_in_range.push_back(unpackKey2(entry.first));
+  }
+  for (const TileIndex& tile : stored_in_range) tileForWrite(tile);  // back into memory
+  focus_ = indexOf(0.5 * (min + max));
   std::size_t changed = 0;
   for (auto it = tiles_.begin(); it != tiles_.end(); ++it) {
     const TileIndex tile_index = unpackKey2(it->first);
@@ -215,6 +335,7 @@ std::size_t GridLayer2D::clearBox(const Eigen::Vector2d& min, const Eigen::Vecto
 void GridLayer2D::reset() {
   std::unique_lock<std::shared_mutex> lock(mutex_);
   tiles_.clear();
+  stored_.clear();
   // Consumers holding older versions must rebuild from scratch.
   change_log_.clear(version_ + 1);
   ++version_;
@@ -222,24 +343,24 @@ void GridLayer2D::reset() {
 
 void GridLayer2D::forEachKnownCell(const CellFn& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  for (const auto& [key, tile] : tiles_) {
-    const TileIndex tile_index = unpackKey2(key);
+  forEachTileLocked([&](const TileIndex& tile_index, const GridTile& tile) {
     for (int linear = 0; linear < GridTile::kArea; ++linear) {
-      const float value = tile->log_odds[linear];
+      const float value = tile.log_odds[linear];
       if (GridTile::isKnown(value)) fn(cellIndex(tile_index, linear), value);
     }
-  }
+  });
 }
 
 void GridLayer2D::forEachTile(
     const std::function<void(const TileIndex&, const GridTile&)>& fn) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  for (const auto& [key, tile] : tiles_) fn(unpackKey2(key), *tile);
+  forEachTileLocked(fn);
 }
 
 bool GridLayer2D::copyTile(const TileIndex& tile, GridTile* out) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  const GridTile* found = findTile(tile);
+  GridTile scratch;
+  const GridTile* found = readTile(packKey(tile), &scratch);
   if (found == nullptr) return false;
   *out = *found;
   return true;
@@ -253,9 +374,10 @@ std::vector<float> GridLayer2D::windowLocked(const CellIndex& origin_cell, int w
   const CellIndex end = origin_cell + CellIndex(width, height);
   const TileIndex first_tile = tileOf(origin_cell);
   const TileIndex last_tile = tileOf(end - CellIndex::Ones());
+  GridTile scratch;
   for (int ty = first_tile.y(); ty <= last_tile.y(); ++ty) {
     for (int tx = first_tile.x(); tx <= last_tile.x(); ++tx) {
-      const GridTile* tile = findTile({tx, ty});
+      const GridTile* tile = readTile(packKey(TileIndex(tx, ty)), &scratch);
       if (tile == nullptr) continue;
       const CellIndex tile_min = TileIndex(tx, ty) * GridTile::kSide;
       const CellIndex lo = tile_min.cwiseMax(origin_cell);
@@ -278,11 +400,10 @@ std::vector<float> GridLayer2D::window(const CellIndex& origin_cell, int width, 
 
 std::optional<CellBox> GridLayer2D::knownBoundsLocked() const {
   std::optional<CellBox> box;
-  for (const auto& [key, tile] : tiles_) {
-    if (tile->known_count == 0) continue;
-    const TileIndex tile_index = unpackKey2(key);
+  forEachTileLocked([&](const TileIndex& tile_index, const GridTile& tile) {
+    if (tile.known_count == 0) return;
     for (int linear = 0; linear < GridTile::kArea; ++linear) {
-      if (!GridTile::isKnown(tile->log_odds[linear])) continue;
+      if (!GridTile::isKnown(tile.log_odds[linear])) continue;
       const CellIndex cell = cellIndex(tile_index, linear);
       if (!box) {
         box = CellBox{cell, cell};
@@ -291,7 +412,7 @@ std::optional<CellBox> GridLayer2D::knownBoundsLocked() const {
         box->max = box->max.cwiseMax(cell);
       }
     }
-  }
+  });
   return box;
 }
 
@@ -333,20 +454,21 @@ std::uint64_t GridLayer2D::version() const {
 
 std::size_t GridLayer2D::tileCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  return tiles_.size();
+  return tiles_.size() + stored_.size();
 }
 
 std::size_t GridLayer2D::knownCellCount() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   std::size_t count = 0;
   for (const auto& entry : tiles_) count += static_cast<std::size_t>(entry.second->known_count);
+  for (const auto& entry : stored_) count += static_cast<std::size_t>(entry.second);
   return count;
 }
 
 std::size_t GridLayer2D::memoryBytes() const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   return tiles_.size() * sizeof(GridTile) + tiles_.bucket_count() * kTableSlotBytes +
-         change_log_.memoryBytes();
+         stored_.bucket_count() * kTableSlotBytes + change_log_.memoryBytes();
 }
 
 }  // namespace occupancy_fusion

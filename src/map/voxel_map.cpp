@@ -53,9 +53,8 @@ VoxelMap::VoxelMap(const VoxelMapConfig& config) : config_(config) {
 
 void VoxelMap::openStore() {
   const bool checkpoints = config_.checkpoint_period > 0;
-  if (config_.spill_folder.empty() || (config_.max_memory_bytes == 0 && !checkpoints)) {
-    return;
-  }
+  const bool bounded = config_.max_memory_bytes > 0 || config_.layer_max_memory_bytes > 0;
+  if (config_.spill_folder.empty() || (!bounded && !checkpoints)) return;
   BlockStoreConfig store;
   store.folder = config_.spill_folder;
   store.resolution = config_.resolution;
@@ -476,6 +475,36 @@ void VoxelMap::forEachResumedLayerRecord(
   std::shared_lock<std::shared_mutex> lock(mutex_);
   if (!checkpointing() || resumed_stamp_.empty()) return;
   store_->forEachLayerRecord(fn);
+}
+
+bool VoxelMap::hasStore() const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  return store_ != nullptr;
+}
+
+bool VoxelMap::spillLayerRecords(const std::vector<BlockStore::LayerRecord>& records) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);  // a store write runs alone
+  if (store_ == nullptr) return false;
+  try {
+    store_->putLayer(records);
+    return true;
+  } catch (const std::exception& error) {
+    recordStoreFailure(error);
+    return false;
+  }
+}
+
+bool VoxelMap::readLayerRecord(std::uint64_t key, std::vector<unsigned char>* bytes) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  if (store_ == nullptr) return false;
+  try {
+    if (store_->getLayer(key, bytes)) return true;
+    throw std::runtime_error("block store '" + config_.spill_folder + "': layer record " +
+                             std::to_string(key) + " is missing");
+  } catch (const std::exception& error) {
+    recordStoreFailure(error);
+    return false;
+  }
 }
 
 CheckpointResult VoxelMap::checkpoint(const std::string& stamp,

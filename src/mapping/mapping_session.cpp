@@ -33,13 +33,6 @@ std::string withoutLeadingSlash(const std::string& topic) {
   return topic.rfind('/', 0) == 0 ? topic.substr(1) : topic;
 }
 
-GridLayer2DConfig laserLayerConfig(const VoxelMapConfig& map) {
-  GridLayer2DConfig layer;
-  layer.resolution = map.resolution;
-  layer.model = map.model;
-  return layer;
-}
-
 template <class Integrator, class Config>
 Integrator& made(std::unique_ptr<Integrator>* integrator, const Config& config) {
   if (!*integrator) *integrator = std::make_unique<Integrator>(config);

@@ -9,11 +9,11 @@ namespace {
 
 constexpr double kBytesPerMebibyte = 1024.0 * 1024.0;
 
-std::size_t readMemoryBound(const ParameterSource& source) {
+std::size_t readMemoryBound(const ParameterSource& source, const char* name = "max_memory_mb") {
   double megabytes = 0.0;
-  source.get("max_memory_mb", &megabytes);
+  source.get(name, &megabytes);
   if (!(megabytes >= 0.0) || !std::isfinite(megabytes)) {
-    throw std::invalid_argument("max_memory_mb must be >= 0 (0: unbounded), got " +
+    throw std::invalid_argument(std::string(name) + " must be >= 0 (0: unbounded), got " +
                                 std::to_string(megabytes));
   }
   return static_cast<std::size_t>(megabytes * kBytesPerMebibyte);
@@ -54,6 +54,7 @@ VoxelMapConfig readVoxelMapConfig(const ParameterSource& source) {
   }
   config.spill_max_bytes = static_cast<std::size_t>(spill_max_mb * kBytesPerMebibyte);
   source.get("checkpoint_period", &config.checkpoint_period);
+  config.layer_max_memory_bytes = readMemoryBound(source, "layer_max_memory_mb");
   config.block_storage = readBlockStorage(source);
   config.validate();
   return config;

@@ -375,6 +375,17 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
     }
   }
   status.add("layer cells", map_->layer().knownCellCount());
+  const TileSpillStatus layer_spill = map_->layer().spillStatus();
+  if (layer_spill.enabled) {
+    status.add("layer tiles in the spill store", layer_spill.spilled_tiles);
+    status.add("layer tiles written to the spill store", layer_spill.tiles_written);
+    status.add("layer tiles paged in", layer_spill.tiles_paged_in);
+    status.add("layer spill failures", layer_spill.failures);
+    if (layer_spill.failures > 0 && spill.failures == 0) {
+      status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                     "the laser layer's spill store failed (tiles kept in memory or unreadable)");
+    }
+  }
   status.add("longest lock hold (ms)", lock_statistics_.longestHoldMs());
   status.add("longest lock hold (call)", lock_statistics_.longestHoldCall());
   status.add("longest wait for a read (ms)", lock_statistics_.longestReadWaitMs());

@@ -8,12 +8,7 @@
 
 namespace occupancy_fusion {
 
-GridLayer2DConfig SharedMapConfig::layer() const {
-  GridLayer2DConfig layer_config;
-  layer_config.resolution = voxels.resolution;
-  layer_config.model = voxels.model;
-  return layer_config;
-}
+GridLayer2DConfig SharedMapConfig::layer() const { return laserLayerConfig(voxels); }
 
 void SharedMapConfig::validate() const {
   if (name.empty()) throw std::invalid_argument("map_name must not be empty");

@@ -297,6 +297,14 @@ void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
        << std::setprecision(3) << mapper.map().resolution() << " m, " << std::setprecision(1)
        << (mapper.map().memoryBytes() + mapper.laserLayer().memoryBytes()) / (1024.0 * 1024.0)
        << " MiB map memory, " << peakResidentMebibytes() << " MiB peak resident\n";
+  const SpillStatus spill = mapper.map().spillStatus();
+  if (spill.enabled) {
+    const TileSpillStatus tiles = mapper.laserLayer().spillStatus();
+    text << "  spill store: " << spill.spilled_blocks << " blocks and " << tiles.spilled_tiles
+         << " laser tiles held by the store alone; written " << spill.blocks_written
+         << " blocks and " << tiles.tiles_written << " tiles, paged in " << spill.blocks_paged_in
+         << " blocks and " << tiles.tiles_paged_in << " tiles\n";
+  }
   if (saved.grid_width == 0) {
     text << "  2D view: none, nothing was mapped (no .pgm, .yaml, .npy, .png)\n";
   } else {

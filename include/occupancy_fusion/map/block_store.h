@@ -70,7 +70,8 @@ class BlockStore {
   void forEach(const std::function<void(std::uint64_t, const VoxelBlock&)>& fn) const;
   // Removes every block (and the checkpoint's number and stamp); the metadata stays.
   void clear();
-  // Removes the blocks spilled since the last checkpoint: the store holds the checkpoint alone
+  // Removes the blocks (and layer records) spilled since the last checkpoint: the store holds the
+  // checkpoint alone
   // (what a resumed map starts from; blocks spilled after it belong to no consistent map).
   void clearSpilled();
 
@@ -94,6 +95,12 @@ class BlockStore {
   void checkpoint(const std::vector<std::uint64_t>& keys, const BlockSource& block_at,
                   const std::vector<std::uint64_t>& removed, const CheckpointInfo& info,
                   const LayerRecords* layer = nullptr);
+  // The companion layer's records that leave its memory (GridLayer2D's bound), in one
+  // transaction; like spilled blocks, they join the layer's checkpoint at the next checkpoint, and
+  // clearSpilled forgets them.
+  void putLayer(const std::vector<LayerRecord>& records);
+  // A layer record: spilled since the last checkpoint, else the checkpoint's; false when neither.
+  bool getLayer(std::uint64_t key, std::vector<unsigned char>* bytes) const;
   // The layer's records of the last checkpoint, in key order.
   void forEachLayerRecord(
       const std::function<void(std::uint64_t, const unsigned char*, std::size_t)>& fn) const;
@@ -122,10 +129,11 @@ class BlockStore {
   BlockStoreConfig config_;
   int lock_fd_ = -1;  // holds the folder's flock while the store is open
   MDB_env* env_ = nullptr;
-  unsigned int blocks_dbi_ = 0;      // spilled since the last checkpoint
-  unsigned int checkpoint_dbi_ = 0;  // the last checkpoint
-  unsigned int layer_dbi_ = 0;       // the companion layer's records of the last checkpoint
-  std::shared_mutex remap_mutex_;    // growing the map (exclusive) vs sync() (shared)
+  unsigned int blocks_dbi_ = 0;         // spilled since the last checkpoint
+  unsigned int checkpoint_dbi_ = 0;     // the last checkpoint
+  unsigned int layer_dbi_ = 0;          // the companion layer's records of the last checkpoint
+  unsigned int layer_spilled_dbi_ = 0;  // its records spilled since
+  std::shared_mutex remap_mutex_;       // growing the map (exclusive) vs sync() (shared)
   unsigned int meta_dbi_ = 0;
 };
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <shared_mutex>
+#include <utility>
 #include <vector>
 
 #include "occupancy_fusion/map/block_change_log.h"
@@ -43,6 +45,10 @@ struct GridTile : LogOddsCells<32 * 32> {
 struct GridLayer2DConfig {
   double resolution = 0.05;  // m, edge of a cell
   OccupancyModel model;      // hit/miss/clamping, as the 3D map's
+  // Bytes of tiles in memory; beyond it, with a TileStore (setTileStore), the tiles farthest from
+  // the last write leave memory for the store (down to 90 % of it) and come back when written.
+  // 0, or no store: no bound.
+  std::size_t max_memory_bytes = 0;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -58,6 +64,26 @@ struct GridChanges {
   bool full_rebuild = false;       // the log no longer reaches back: rebuild from scratch
   std::vector<TileIndex> changed;  // written since. Tiles are only removed by reset(), which
                                    // makes every older version a full rebuild.
+};
+
+// Where a layer's tiles go beyond its memory bound (map_checkpoints.h: the map's spill store).
+class TileStore {
+ public:
+  virtual ~TileStore() = default;
+  // Writes the tiles in one transaction; false: the store failed and none was written.
+  virtual bool put(const std::vector<std::pair<std::uint64_t, const GridTile*>>& tiles) = 0;
+  // A tile written before, by its packKey; false: missing or unreadable.
+  virtual bool get(std::uint64_t key, GridTile* out) const = 0;
+};
+
+// The layer's tiles outside memory, for diagnostics.
+struct TileSpillStatus {
+  bool enabled = false;           // a bound and a store
+  std::size_t spilled_tiles = 0;  // held by the store alone now
+  std::size_t tiles_written = 0;  // to the store, since construction
+  std::size_t tiles_paged_in = 0;
+  std::size_t failures = 0;  // puts that failed (the tiles stayed in memory), reads that failed
+                             // (the tile read as unknown)
 };
 
 // Inclusive range of cell indices.
@@ -124,6 +150,20 @@ class GridLayer2D {
   void importRaster(const LogOddsRaster& raster);
   // Replaces a whole tile's cells as they are (unclamped; NaN unknown): what a checkpoint resumes.
   void restoreTile(const TileIndex& tile, const GridTile& cells);
+  // The store for tiles beyond config().max_memory_bytes. Every read (point queries, forEach*,
+  // copyTile, window, counts) then gives what the layer without the bound gives, reading a
+  // stored tile from the store; a write brings it back into memory. Spilling is not a change
+  // (changesSince). A store that fails keeps the tiles in memory (nothing is lost; the bound is
+  // exceeded) and is counted in spillStatus().
+  void setTileStore(std::unique_ptr<TileStore> store);
+  TileSpillStatus spillStatus() const;
+  // For a checkpoint with the map: `tile` gets every tile written since `version` (all of them
+  // when the change log no longer reaches back: full_rebuild), wherever it is, then `commit`
+  // runs with the changes, all under the layer's shared lock, so that no write (and no tile
+  // leaving memory) comes between them. Returns the changes (their version for the next call).
+  using TileFn = std::function<void(const TileIndex&, const GridTile&)>;
+  GridChanges visitChangedTiles(std::uint64_t version, const TileFn& tile,
+                                const std::function<void(const GridChanges&)>& commit) const;
   // As VoxelMap::clearBox: every known cell whose centre lies in [min, max] becomes free at the
   // lower clamping bound. Returns the number of cells changed.
   std::size_t clearBox(const Eigen::Vector2d& min, const Eigen::Vector2d& max);
@@ -144,15 +184,20 @@ class GridLayer2D {
   std::uint64_t version() const;
 
   // Accounting.
-  std::size_t tileCount() const;
+  std::size_t tileCount() const;  // in memory and stored
   std::size_t knownCellCount() const;
-  std::size_t memoryBytes() const;  // tiles, hash table and change log
+  std::size_t memoryBytes() const;  // tiles, hash table, change log and the stored tiles' index
 
  private:
   using TileTable = SpatialKeyMap<std::unique_ptr<GridTile>>;  // keyed by packKey(tile)
 
   GridTile& tileForWrite(const TileIndex& tile);  // allocates, logs; caller holds unique lock
-  const GridTile* findTile(const TileIndex& tile) const;
+  const GridTile* findTile(const TileIndex& tile) const;  // in memory only
+  // In memory, or read from the store into *scratch; nullptr when the layer has no such tile.
+  const GridTile* readTile(std::uint64_t key, GridTile* scratch) const;
+  // Calls fn for every tile, those in memory first, then the stored ones one at a time.
+  void forEachTileLocked(const TileFn& fn) const;
+  void enforceBound();  // caller holds the unique lock
   void markWritten(std::uint64_t key, GridTile* tile);
   void finishWrite();  // trims the change log, bumps the version
   // Calls write_cell(tile, linear index in tile, value) for each non-NaN value of a dense window
@@ -172,6 +217,11 @@ class GridLayer2D {
   TileTable tiles_;
   std::uint64_t version_ = 1;
   BlockChangeLog change_log_;
+  std::unique_ptr<TileStore> store_;
+  SpatialKeyMap<int> stored_;            // tiles held by the store alone: their known cells
+  CellIndex focus_ = CellIndex::Zero();  // the last write's centre: eviction keeps what is near
+  std::size_t tiles_written_ = 0, tiles_paged_in_ = 0;
+  mutable std::atomic<std::size_t> store_failures_{0};
 };
 
 }  // namespace occupancy_fusion

@@ -1,11 +1,13 @@
 // Checkpoints of a map with its 2D laser layer (VoxelMapConfig::checkpoint_period): the voxels'
 // blocks and the layer's tiles changed since the previous checkpoint go into the map's store in
 // one transaction, so that the two resume together; a layer constructed beside a map that
-// resumed a checkpoint gets that checkpoint's tiles back.
+// resumed a checkpoint gets that checkpoint's tiles back. The same store takes the layer's tiles
+// beyond its memory bound (VoxelMapConfig::layer_max_memory_bytes).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 
 #include "occupancy_fusion/map/grid_layer_2d.h"
@@ -13,14 +15,19 @@
 
 namespace occupancy_fusion {
 
+// The laser layer that goes with a map: its resolution, sensor model and memory bound.
+GridLayer2DConfig laserLayerConfig(const VoxelMapConfig& map);
+
 // The time now in UTC, ISO 8601 ("2026-12-02T22:29:57Z"): what the MapServer and offline_mapper
 // stamp their checkpoints with.
 std::string checkpointStampNow();
 
 class MapCheckpoints {
  public:
-  // Restores into `layer` the tiles of the checkpoint `voxels` resumed, if it resumed one. Throws
-  // std::runtime_error naming the store's folder for a damaged tile record.
+  // Gives `layer` the map's store for the tiles beyond its memory bound (when both are set),
+  // and restores into it the tiles of the checkpoint `voxels` resumed, if it resumed one. Throws
+  // std::runtime_error naming the store's folder for a damaged tile record. `voxels` must outlive
+  // `layer`.
   MapCheckpoints(VoxelMap* voxels, GridLayer2D* layer);
 
   // VoxelMap::checkpoint with the layer's tiles changed since the previous one (all of them at
@@ -29,6 +36,8 @@ class MapCheckpoints {
   std::size_t resumedTiles() const { return resumed_tiles_; }
 
  private:
+  std::runtime_error damagedTile(std::uint64_t key, std::size_t size) const;
+
   VoxelMap* voxels_;
   GridLayer2D* layer_;
   std::uint64_t layer_version_ = 0;  // the layer's version the last checkpoint holds

@@ -50,6 +50,9 @@ struct VoxelMapConfig {
   // checkpoint (VoxelMap's "Checkpoints"). Whoever owns the map calls checkpoint() this often.
   double checkpoint_period = 0.0;
   BlockStorage block_storage = BlockStorage::kDense;
+  // The 2D laser layer beside the map (map_checkpoints.h): its own bound on tiles in memory,
+  // beyond which tiles go to this map's store (a spill_folder is needed). 0: unbounded.
+  std::size_t layer_max_memory_bytes = 0;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -198,6 +201,12 @@ class VoxelMap {
   // `layer`: a companion layer's records, written in the same transaction (map_checkpoints.h).
   CheckpointResult checkpoint(const std::string& stamp,
                               const BlockStore::LayerRecords* layer = nullptr);
+  // A companion layer's records that leave its memory (GridLayer2D's bound: map_checkpoints.h),
+  // into this map's store beside the blocks, and read back. false: no store, or it failed (counted
+  // in spillStatus()). hasStore(): a spill folder whose store opened.
+  bool hasStore() const;
+  bool spillLayerRecords(const std::vector<BlockStore::LayerRecord>& records);
+  bool readLayerRecord(std::uint64_t key, std::vector<unsigned char>* bytes) const;
   // The companion layer's records of the checkpoint this map resumed (nothing without one).
   void forEachResumedLayerRecord(
       const std::function<void(std::uint64_t, const unsigned char*, std::size_t)>& fn) const;
@@ -224,7 +233,7 @@ class VoxelMap {
   std::uint64_t version() const;
 
   // Accounting.
-  std::size_t blockCount() const;  // in memory and spilled
+  std::size_t blockCount() const;                // in memory and spilled
   std::vector<BlockIndex> blockIndices() const;  // every block, in memory and spilled
   std::size_t knownVoxelCount() const;
   std::size_t memoryBytes() const;  // blocks, hash table, change log and spilled blocks' index

@@ -20,7 +20,9 @@ OccupancyModel readOccupancyModel(const ParameterSource& source);
 // resolution (m), the occupancy model above, max_memory_mb (MiB, 0 = unbounded), spill_folder
 // (the store the bound's evicted blocks go to; empty: they are dropped), spill_max_mb (MiB, the
 // store's limit on disk; 0 = the disk's), checkpoint_period (s; 0 = none: with spill_folder, the
-// map resumes from the store's last checkpoint and its owner checkpoints it this often).
+// map resumes from the store's last checkpoint and its owner checkpoints it this often),
+// layer_max_memory_mb (MiB, the 2D laser layer's bound; its tiles beyond it go to the same store;
+// 0 = unbounded).
 VoxelMapConfig readVoxelMapConfig(const ParameterSource& source);
 
 // occupancy_min_z, occupancy_max_z (m, map frame; the height band projected into the 2D grid,

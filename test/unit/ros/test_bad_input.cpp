@@ -432,6 +432,7 @@ TEST(BadParameters, AreRejectedNamingTheParameter) {
       {{{"spill_max_mb", -1.0}}, "spill_max_mb"},
       {{{"spill_max_mb", std::nan("")}}, "spill_max_mb"},
       {{{"max_memory_mb", -2.0}}, "max_memory_mb"},
+      {{{"layer_max_memory_mb", -1.0}}, "layer_max_memory_mb"},
   };
   for (const auto& [values, name] : cases) {
     const std::string why = messageOf<std::invalid_argument>([&] {

@@ -4,6 +4,7 @@
 // that cannot be resumed is refused as a bad input (exit 2), naming it.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -107,7 +108,8 @@ TEST_F(OfflineResume, SecondPartResumedFromTheFirstEqualsTheWholeRecording) {
 // that keeps most of the map in the store.
 TEST_F(OfflineResume, SecondPartResumedFromTheCheckpointStoreEqualsTheWholeRecording) {
   const std::string store = " --set spill_folder=" + quoted(dir_ / "store") +
-                            " --set checkpoint_period=3600 --set max_memory_mb=0.05";
+                            " --set checkpoint_period=3600 --set max_memory_mb=0.05" +
+                            " --set layer_max_memory_mb=0.01";
   const RunResult first = map("--bag " + quoted(dir_ / "first.bag") + store, "first_store");
   ASSERT_EQ(first.exit_code, 0) << first.err;
   const RunResult second = map("--bag " + quoted(dir_ / "second.bag") + store, "second_store");
@@ -116,6 +118,17 @@ TEST_F(OfflineResume, SecondPartResumedFromTheCheckpointStoreEqualsTheWholeRecor
       "--bag " + quoted(dir_ / "first.bag") + " --bag " + quoted(dir_ / "second.bag"), "whole_all");
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   EXPECT_EQ(second.err.find("warning"), std::string::npos) << second.err;
+  // Both bounds were exceeded: blocks and laser tiles went to the store and came back.
+  for (const RunResult* run : {&first, &second}) {
+    const std::size_t line = run->out.find("spill store: ");
+    ASSERT_NE(line, std::string::npos) << run->out;
+    unsigned long blocks = 0, tiles = 0;
+    ASSERT_EQ(std::sscanf(run->out.c_str() + line, "spill store: %lu blocks and %lu laser tiles",
+                          &blocks, &tiles),
+              2);
+    EXPECT_GT(blocks, 0u);
+    EXPECT_GT(tiles, 0u);
+  }
   EXPECT_NE(bytes("first_store", ".ot"), bytes("whole_all", ".ot"));
   EXPECT_TRUE(bytes("second_store", ".ot") == bytes("whole_all", ".ot"));
   EXPECT_NE(bytes("first_store", ".laser.npy"), bytes("whole_all", ".laser.npy"));
