@@ -7,22 +7,23 @@
 // system can drop), the map's own accounting and its blocks in memory and in the store. At the
 // end the map is saved (--save PREFIX: PREFIX.ot, streamed from the blocks; with
 // --save_liboctomap 1 also through liboctomap's OcTree, for comparison), so that a bounded run and
-// an unbounded one can be compared byte for byte, and the save's peak memory is reported. The building is generated per frame around the camera
-// (segments near it only), so rendering costs the same at the first metre and the thousandth.
+// an unbounded one can be compared byte for byte, and the save's peak memory is reported. The
+// building is generated per frame around the camera (segments near it only), so rendering costs the
+// same at the first metre and the thousandth.
 #include <omp.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <iterator>
-#include <memory>
-#include <stdexcept>
-#include <thread>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "occupancy_fusion/benchmarks/benchmark_harness.h"
@@ -273,11 +274,12 @@ int runSpill(const CommandLine& args) {
       "spill length_m=%.0f bound_mb=%.1f frames=%d integrate_ms_mean=%.2f "
       "integrate_ms_median=%.2f integrate_ms_p99=%.2f peak_rss_anon_mb=%.1f "
       "map_mb=%.1f blocks=%zu spilled=%zu blocks_written=%zu paged_in=%zu "
-      "failures=%zu evicted=%zu known_voxels=%zu\n",
+      "read_ahead=%zu read_under_lock=%zu failures=%zu evicted=%zu known_voxels=%zu\n",
       length, bound_mb, frames, mean, sorted[sorted.size() / 2],
       sorted[std::min(sorted.size() - 1, sorted.size() * 99 / 100)], peak_anon,
       map.memoryBytes() / 1048576.0, map.blockCount(), status.spilled_blocks, status.blocks_written,
-      status.blocks_paged_in, status.failures, map.evictedBlockCount(), map.knownVoxelCount());
+      status.blocks_paged_in, status.blocks_read_ahead, status.blocks_read_under_lock,
+      status.failures, map.evictedBlockCount(), map.knownVoxelCount());
   if (args.has("save")) {
     saveAndMeasure(map, args.value("save"), args.intValue("save_liboctomap", 0) != 0);
   }

@@ -298,6 +298,8 @@ void BlockStore::put(std::uint64_t key, const VoxelBlock& block) {
 }
 
 bool BlockStore::get(std::uint64_t key, VoxelBlock* out) const {
+  // A read may run beside a writer that grows the map (VoxelMap reads ahead of its lock).
+  std::shared_lock<std::shared_mutex> lock(remap_mutex_);
   Transaction txn(env_, MDB_RDONLY);
   if (txn.beginCode() != MDB_SUCCESS) fail("cannot read", txn.beginCode());
   KeyBytes key_bytes(key);

@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 #include <boost/crc.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cmath>
@@ -234,25 +235,74 @@ LayerFilePaths layerFilePaths(const std::string& prefix) {
   return {prefix + ".laser.yaml", prefix + ".laser.npy"};
 }
 
+namespace {
+
+// The .npy's bytes go out in pieces; the CRC-32 follows them.
+class ChecksummedOutput {
+ public:
+  explicit ChecksummedOutput(std::ostream& out) : out_(out) {}
+  void write(const std::string& bytes) {
+    crc_.process_bytes(bytes.data(), bytes.size());
+    out_.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  std::uint32_t checksum() const { return crc_.checksum(); }
+
+ private:
+  std::ostream& out_;
+  boost::crc_32_type crc_;
+};
+
+void writeLayerYaml(const LayerFilePaths& paths, std::uint32_t npy_crc32, double resolution,
+                    const CellIndex& origin_cell, int width, int height) {
+  writeFileAtomically(paths.yaml, [&](std::ostream& out) {
+    out << "# occupancy_fusion 2D laser layer: log-odds per cell in the .npy, NaN = unknown,\n"
+        << "# array[y, x] is cell origin_cell + (x, y); row 0 is the lowest y.\n"
+        << "log_odds: " << std::filesystem::path(paths.npy).filename().string() << "\n"
+        << "log_odds_crc32: " << hexText(npy_crc32) << "  # of the whole .npy file\n"
+        << "resolution: " << numberText(resolution) << "\n"
+        << "origin_cell: [" << origin_cell.x() << ", " << origin_cell.y() << "]\n"
+        << std::setprecision(15)  // origin is for readers: -23.4, not -23.400000000000002
+        << "origin: [" << origin_cell.x() * resolution << ", " << origin_cell.y() * resolution
+        << "]\n"
+        << "width: " << width << "\n"
+        << "height: " << height << "\n";
+  });
+}
+
+}  // namespace
+
 LayerFilePaths writeLayerFiles(const LogOddsRaster& raster, const std::string& prefix) {
   LayerFilePaths paths = layerFilePaths(prefix);
   const std::string npy_bytes = encodeNpy(raster);
   writeFileAtomically(paths.npy, [&](std::ostream& out) {
     out.write(npy_bytes.data(), static_cast<std::streamsize>(npy_bytes.size()));
   });
-  writeFileAtomically(paths.yaml, [&](std::ostream& out) {
-    out << "# occupancy_fusion 2D laser layer: log-odds per cell in the .npy, NaN = unknown,\n"
-        << "# array[y, x] is cell origin_cell + (x, y); row 0 is the lowest y.\n"
-        << "log_odds: " << std::filesystem::path(paths.npy).filename().string() << "\n"
-        << "log_odds_crc32: " << hexText(crc32Of(npy_bytes)) << "  # of the whole .npy file\n"
-        << "resolution: " << numberText(raster.resolution) << "\n"
-        << "origin_cell: [" << raster.origin_cell.x() << ", " << raster.origin_cell.y() << "]\n"
-        << std::setprecision(15)  // origin is for readers: -23.4, not -23.400000000000002
-        << "origin: [" << raster.origin_cell.x() * raster.resolution << ", "
-        << raster.origin_cell.y() * raster.resolution << "]\n"
-        << "width: " << raster.width << "\n"
-        << "height: " << raster.height << "\n";
+  writeLayerYaml(paths, crc32Of(npy_bytes), raster.resolution, raster.origin_cell, raster.width,
+                 raster.height);
+  return paths;
+}
+
+LayerFilePaths writeLayerFiles(const GridLayer2D& layer, const std::string& prefix) {
+  LayerFilePaths paths = layerFilePaths(prefix);
+  const std::optional<CellBox> box = layer.knownBounds();
+  const CellIndex origin = box ? box->min : CellIndex::Zero();
+  const int width = box ? box->width() : 0, height = box ? box->height() : 0;
+  std::uint32_t crc = 0;
+  writeFileAtomically(paths.npy, [&](std::ostream& out) {
+    ChecksummedOutput npy(out);
+    npy.write(npyFloatHeader(height, width));
+    // One row of tiles at a time: a layer larger than memory (its tiles in the map's store) is
+    // written holding one strip of the window.
+    std::string bytes;
+    for (int y = 0; y < height; y += GridTile::kSide) {
+      const int rows = std::min(GridTile::kSide, height - y);
+      bytes.clear();
+      appendLittleEndianFloats(layer.window(origin + CellIndex(0, y), width, rows), &bytes);
+      npy.write(bytes);
+    }
+    crc = npy.checksum();
   });
+  writeLayerYaml(paths, crc, layer.resolution(), origin, width, height);
   return paths;
 }
 

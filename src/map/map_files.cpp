@@ -178,27 +178,35 @@ void writeMapServerFiles(const OccupancyRaster& raster, const std::string& prefi
   });
 }
 
+std::string npyFloatHeader(int rows, int columns) {
+  // Format 1.0: magic, version, uint16 header length, then a Python dict literal padded with
+  // spaces and ended by '\n' so that the data starts at a multiple of 64 bytes.
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
+                       std::to_string(rows) + ", " + std::to_string(columns) + "), }";
+  constexpr std::size_t kPreamble = 10;  // magic (6) + version (2) + length (2)
+  const std::size_t unpadded = kPreamble + header.size() + 1;
+  header.append((64 - unpadded % 64) % 64, ' ');
+  header.push_back('\n');
+  std::string bytes("\x93NUMPY\x01\x00", 8);
+  bytes.push_back(static_cast<char>(header.size() & 0xff));
+  bytes.push_back(static_cast<char>((header.size() >> 8) & 0xff));
+  return bytes + header;
+}
+
+void appendLittleEndianFloats(const std::vector<float>& values, std::string* bytes) {
+  std::ostringstream out;
+  for (const float value : values) writeLittleEndianFloat(out, value);
+  bytes->append(out.str());
+}
+
 std::string encodeNpy(const LogOddsRaster& raster) {
   if (raster.width < 0 || raster.height < 0 ||
       raster.data.size() != static_cast<std::size_t>(raster.width) * raster.height) {
     throw std::invalid_argument("encodeNpy: data size does not match width x height");
   }
-  // Format 1.0: magic, version, uint16 header length, then a Python dict literal padded with
-  // spaces and ended by '\n' so that the data starts at a multiple of 64 bytes.
-  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
-                       std::to_string(raster.height) + ", " + std::to_string(raster.width) + "), }";
-  constexpr std::size_t kPreamble = 10;  // magic (6) + version (2) + length (2)
-  const std::size_t unpadded = kPreamble + header.size() + 1;
-  header.append((64 - unpadded % 64) % 64, ' ');
-  header.push_back('\n');
-  std::ostringstream out;
-  out.write("\x93NUMPY\x01\x00", 8);
-  const char length[2] = {static_cast<char>(header.size() & 0xff),
-                          static_cast<char>((header.size() >> 8) & 0xff)};
-  out.write(length, 2);
-  out << header;
-  for (const float value : raster.data) writeLittleEndianFloat(out, value);
-  return out.str();
+  std::string bytes = npyFloatHeader(raster.height, raster.width);
+  appendLittleEndianFloats(raster.data, &bytes);
+  return bytes;
 }
 
 void writeNpy(const LogOddsRaster& raster, const std::string& path) {

@@ -95,7 +95,7 @@ void VoxelMap::resumeFromStore() {
     *stored.dense() = block;  // version 0: its first write logs it
     if (hybrid()) stored.settle(kMaxSparseBricks);
     if (storageBytesLocked() + stored.bytes() > room) {
-      spilled_.emplace(key, block.known_count);
+      spilled_.emplace(key, SpilledBlock{block.known_count, 0});
       spilled_known_voxels_ += static_cast<std::size_t>(block.known_count);
       return;
     }
@@ -165,7 +165,7 @@ void VoxelMap::recordStoreFailure(const std::exception& error) const {
 
 void VoxelMap::forgetSpilled(std::uint64_t key) {
   auto it = spilled_.find(key);
-  spilled_known_voxels_ -= static_cast<std::size_t>(it->second);
+  spilled_known_voxels_ -= static_cast<std::size_t>(it->second.known);
   spilled_.erase(it);
 }
 
@@ -173,6 +173,7 @@ std::optional<StoredBlock> VoxelMap::takeSpilled(std::uint64_t key) {
   if (spilled_.find(key) == spilled_.end()) return std::nullopt;
   VoxelBlock block;
   const bool read = readSpilled(key, &block);
+  ++blocks_read_under_lock_;
   return adoptSpilled(key, read ? &block : nullptr);
 }
 
@@ -191,8 +192,48 @@ std::optional<StoredBlock> VoxelMap::adoptSpilled(std::uint64_t key, const Voxel
   return stored;
 }
 
-void VoxelMap::pageInSpilled(const std::vector<BlockIndex>& blocks) {
+VoxelMap::ReadAhead VoxelMap::readSpilledAhead(const std::vector<BlockIndex>& blocks) const {
+  ReadAhead ahead;
+  {
+    std::shared_lock<std::shared_mutex> lock(mutex_);
+    if (spilled_.empty()) return ahead;
+    for (const BlockIndex& block : blocks) {
+      const std::uint64_t key = packKey(block);
+      auto it = spilled_.find(key);
+      if (it == spilled_.end()) continue;
+      ahead.keys.push_back(key);
+      ahead.spills.push_back(it->second.spill);
+    }
+  }
+  // Without the map's lock: the store outlives the map's use of it, and LMDB's readers run beside
+  // its writer (the store's remap lock keeps a growth from coming between). A failure here is not
+  // counted: the block is read again under the lock, which counts it.
+  const long count = static_cast<long>(ahead.keys.size());
+  ahead.blocks.resize(ahead.keys.size());
+  ahead.found.assign(ahead.keys.size(), 0);
+#pragma omp parallel for schedule(dynamic, 4) if (count > 1)
+  for (long i = 0; i < count; ++i) {
+    try {
+      ahead.found[i] = store_->get(ahead.keys[i], &ahead.blocks[i]);
+    } catch (const std::exception&) {
+      ahead.found[i] = 0;
+    }
+  }
+  return ahead;
+}
+
+void VoxelMap::pageInSpilled(const std::vector<BlockIndex>& blocks, ReadAhead* ahead) {
   if (spilled_.empty()) return;
+  // Read ahead and not spilled again since (another writer may have paged one in and spilled it
+  // again, or reset the map): adopted as read.
+  for (std::size_t i = 0; i < ahead->keys.size(); ++i) {
+    auto it = spilled_.find(ahead->keys[i]);
+    if (it == spilled_.end() || it->second.spill != ahead->spills[i] || !ahead->found[i]) continue;
+    std::optional<StoredBlock> stored = adoptSpilled(ahead->keys[i], &ahead->blocks[i]);
+    ++blocks_read_ahead_;
+    block_bytes_ += stored->bytes();
+    blocks_.emplace(ahead->keys[i], std::move(*stored));
+  }
   std::vector<std::uint64_t> keys;
   for (const BlockIndex& block : blocks) {
     const std::uint64_t key = packKey(block);
@@ -205,6 +246,7 @@ void VoxelMap::pageInSpilled(const std::vector<BlockIndex>& blocks) {
   std::vector<char> found(keys.size());
 #pragma omp parallel for schedule(dynamic, 4)
   for (long i = 0; i < count; ++i) found[i] = readSpilled(keys[i], &read[i]);
+  blocks_read_under_lock_ += keys.size();
   for (long i = 0; i < count; ++i) {
     std::optional<StoredBlock> stored = adoptSpilled(keys[i], found[i] ? &read[i] : nullptr);
     if (!stored) continue;
@@ -337,8 +379,9 @@ void VoxelMap::setLogOdds(const VoxelIndex& index, float log_odds) {
 
 void VoxelMap::updateBlocks(const std::vector<BlockIndex>& blocks,
                             const std::function<void(const BlockIndex&, VoxelBlock&)>& fn) {
+  ReadAhead ahead = readSpilledAhead(blocks);
   std::unique_lock<std::shared_mutex> lock(mutex_);
-  pageInSpilled(blocks);
+  pageInSpilled(blocks, &ahead);
   // Allocation changes the table, so it happens first and serially; the callbacks then only
   // touch their own block.
   const int count = static_cast<int>(blocks.size());
@@ -451,6 +494,7 @@ void VoxelMap::enforceMemoryBound() {
     if (!checkpointing() || unsaved_.count(key) != 0) writing.push_back(key);
   }
   const bool spilled = store_ != nullptr && (writing.empty() || spillToStore(writing));
+  if (spilled) ++spills_;
   if (spilled && checkpointing()) {
     for (std::uint64_t key : writing) unsaved_.erase(key);  // in the store's spill table now
   }
@@ -458,7 +502,7 @@ void VoxelMap::enforceMemoryBound() {
     auto it = blocks_.find(key);
     if (spilled) {
       const int known = it->second.knownCount();
-      spilled_.emplace(key, known);
+      spilled_.emplace(key, SpilledBlock{known, spills_});
       spilled_known_voxels_ += static_cast<std::size_t>(known);
     } else {
       markRemoved(key);
@@ -811,6 +855,8 @@ SpillStatus VoxelMap::spillStatus() const {
   if (config_.max_memory_bytes > 0) status.folder = config_.spill_folder;
   status.spilled_blocks = spilled_.size();
   status.blocks_written = blocks_spilled_;
+  status.blocks_read_ahead = blocks_read_ahead_;
+  status.blocks_read_under_lock = blocks_read_under_lock_;
   status.blocks_paged_in = blocks_paged_in_;
   std::lock_guard<std::mutex> failure_lock(failure_mutex_);
   status.failures = store_failures_;

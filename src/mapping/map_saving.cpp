@@ -42,9 +42,7 @@ SavedMapFiles saveMap(const VoxelMap& voxels, const GridLayer2D& layer, const st
   FusedGridView view(options.band);
   const OccupancyRaster raster =
       timed(timer, "~save_map 2D view", [&] { return view.update(voxels, &layer); });
-  const LogOddsRaster layer_window =
-      timed(timer, "~save_map laser layer copy", [&] { return layer.toLogOddsRaster(); });
-  if (voxels.knownVoxelCount() == 0 && layer_window.data.empty()) {
+  if (voxels.knownVoxelCount() == 0 && layer.knownCellCount() == 0) {
     throw std::runtime_error(
         "the map has no known voxel and no 2D cell: nothing written, "
         "existing files of " +
@@ -67,7 +65,7 @@ SavedMapFiles saveMap(const VoxelMap& voxels, const GridLayer2D& layer, const st
     written->push_back(prefix + ".pgm");
     written->push_back(prefix + ".yaml");
   }
-  const LayerFilePaths layer_paths = writeLayerFiles(layer_window, prefix);
+  const LayerFilePaths layer_paths = writeLayerFiles(layer, prefix);  // a strip at a time
   written->push_back(layer_paths.npy);
   written->push_back(layer_paths.yaml);
   if (!options.inspection_files) return saved;

@@ -365,6 +365,8 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
     status.add("spilled blocks", spill.spilled_blocks);
     status.add("blocks written to the spill store", spill.blocks_written);
     status.add("blocks paged in", spill.blocks_paged_in);
+    status.add("blocks paged in, read before the write lock", spill.blocks_read_ahead);
+    status.add("blocks paged in, read under the write lock", spill.blocks_read_under_lock);
     status.add("spill store failures", spill.failures);
     if (spill.checkpoints) {
       status.add("checkpoints written", spill.checkpoints_written);

@@ -129,11 +129,11 @@ class BlockStore {
   BlockStoreConfig config_;
   int lock_fd_ = -1;  // holds the folder's flock while the store is open
   MDB_env* env_ = nullptr;
-  unsigned int blocks_dbi_ = 0;         // spilled since the last checkpoint
-  unsigned int checkpoint_dbi_ = 0;     // the last checkpoint
-  unsigned int layer_dbi_ = 0;          // the companion layer's records of the last checkpoint
-  unsigned int layer_spilled_dbi_ = 0;  // its records spilled since
-  std::shared_mutex remap_mutex_;       // growing the map (exclusive) vs sync() (shared)
+  unsigned int blocks_dbi_ = 0;            // spilled since the last checkpoint
+  unsigned int checkpoint_dbi_ = 0;        // the last checkpoint
+  unsigned int layer_dbi_ = 0;             // the companion layer's records of the last checkpoint
+  unsigned int layer_spilled_dbi_ = 0;     // its records spilled since
+  mutable std::shared_mutex remap_mutex_;  // growing the map (exclusive) vs sync() and get()
   unsigned int meta_dbi_ = 0;
 };
 

@@ -26,6 +26,9 @@ LayerFilePaths layerFilePaths(const std::string& prefix);
 // Writes a layer's known window (GridLayer2D::toLogOddsRaster; an empty layer gives a 0 x 0
 // array). Throws std::runtime_error naming the file that cannot be written.
 LayerFilePaths writeLayerFiles(const LogOddsRaster& layer_window, const std::string& prefix);
+// The same bytes from the layer itself, read one row of tiles at a time (each strip as it is when
+// read): a layer whose tiles are in the map's store is written without holding its window.
+LayerFilePaths writeLayerFiles(const GridLayer2D& layer, const std::string& prefix);
 
 // Parses the yaml's text and the .npy's bytes into a raster. Throws std::runtime_error saying what
 // is wrong: a missing or malformed key, a CRC-32 other than the array's, a .npy that is not a 2D

@@ -8,6 +8,7 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/map/grid_layer_2d.h"
@@ -41,6 +42,10 @@ void writeMapServerFiles(const OccupancyRaster& raster, const std::string& prefi
 void writeNpy(const LogOddsRaster& raster, const std::string& path);
 // The bytes writeNpy writes. Throws std::invalid_argument for a data size not width x height.
 std::string encodeNpy(const LogOddsRaster& raster);
+// Its parts, for an array written in pieces: the header of a '<f4' C-order (rows, columns)
+// array, and values appended as little-endian float32.
+std::string npyFloatHeader(int rows, int columns);
+void appendLittleEndianFloats(const std::vector<float>& values, std::string* bytes);
 
 // PCD v0.7 with fields x y z probability (float32): the centre and occupancy probability of every
 // known voxel. WIDTH = number of points, HEIGHT = 1.

@@ -78,8 +78,13 @@ struct SpillStatus {
   std::size_t spilled_blocks = 0;   // blocks held by the store alone now
   std::size_t blocks_written = 0;   // blocks written to the store, in all
   std::size_t blocks_paged_in = 0;  // blocks brought back into memory by writes, in all
-  std::size_t failures = 0;         // store operations that failed (blocks dropped or unreadable)
-  std::string last_error;           // the newest failure, naming the store's folder
+  // Of those, read from the store while the write waited for nothing (before its exclusive lock:
+  // readers and other writers went on) and while it held the exclusive lock (a block spilled
+  // again by another writer in between, or a single block written through updateVoxel).
+  std::size_t blocks_read_ahead = 0;
+  std::size_t blocks_read_under_lock = 0;
+  std::size_t failures = 0;  // store operations that failed (blocks dropped or unreadable)
+  std::string last_error;    // the newest failure, naming the store's folder
   // Checkpoints (VoxelMapConfig::checkpoint_period with a store that opened).
   bool checkpoints = false;
   std::size_t resumed_blocks = 0;       // read from the store's last checkpoint at construction
@@ -275,7 +280,17 @@ class VoxelMap {
   // of the spilled index, for the caller to insert into blocks_.
   std::optional<StoredBlock> adoptSpilled(std::uint64_t key, const VoxelBlock* block);
   // The spilled ones of a write call's blocks, read from the store in parallel and put in memory.
-  void pageInSpilled(const std::vector<BlockIndex>& blocks);
+  // A write call's spilled blocks read from the store before it takes the exclusive lock, each
+  // with the spill it was read from (SpilledBlock::spill): a block spilled again in between is
+  // read once more under the lock.
+  struct ReadAhead {
+    std::vector<std::uint64_t> keys;
+    std::vector<std::uint64_t> spills;
+    std::vector<VoxelBlock> blocks;
+    std::vector<char> found;
+  };
+  ReadAhead readSpilledAhead(const std::vector<BlockIndex>& blocks) const;
+  void pageInSpilled(const std::vector<BlockIndex>& blocks, ReadAhead* ahead);
   void forgetSpilled(std::uint64_t key);
   void pageInSpilledInRange(const BlockIndex& lo, const BlockIndex& hi);
   std::vector<std::uint64_t> farthestBlocksOverTarget() const;
@@ -311,7 +326,13 @@ class VoxelMap {
   std::unique_ptr<BlockStore> store_;  // the spill store, if configured
   // Blocks held by the store alone (never also in blocks_), with their known voxel counts; the
   // store may hold older copies of blocks since paged in, which this index leaves out.
-  SpatialKeyMap<int> spilled_;
+  struct SpilledBlock {
+    int known = 0;            // its known voxels
+    std::uint64_t spill = 0;  // which spill wrote it (spills_ then); 0: resumed from a checkpoint
+  };
+  SpatialKeyMap<SpilledBlock> spilled_;
+  std::uint64_t spills_ = 0;  // eviction rounds that spilled, ever (not reset: see ReadAhead)
+  std::size_t blocks_read_ahead_ = 0, blocks_read_under_lock_ = 0;
   std::size_t spilled_known_voxels_ = 0;
   std::size_t blocks_spilled_ = 0;
   std::size_t blocks_paged_in_ = 0;

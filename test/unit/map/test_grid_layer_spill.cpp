@@ -5,11 +5,15 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "../../common/test_folder.h"
+#include "occupancy_fusion/map/layer_files.h"
 #include "occupancy_fusion/map/map_checkpoints.h"
 
 namespace occupancy_fusion {
@@ -49,6 +53,11 @@ std::vector<Scan> scansOutAndBack(unsigned seed) {
   for (int step = 0; step <= 60; ++step) scans.push_back(scanAt({10 * step, 3 * (step % 7)}, &rng));
   for (int step = 60; step >= 0; step -= 3) scans.push_back(scanAt({10 * step, -20}, &rng));
   return scans;
+}
+
+std::string readAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
@@ -122,6 +131,18 @@ TEST(GridLayerSpill, BoundedLayerReadsAsAnUnboundedOneAndKeepsItsBound) {
   EXPECT_EQ(status.failures, 0u);
   EXPECT_LE(tilesInMemory(bounded), kBoundTiles);
   expectSameLayers(bounded, reference);
+
+  // Its files, written a strip of tiles at a time (most of them from the store), are the bytes of
+  // the unbounded layer's whole window written at once; the bound holds while writing them.
+  const LayerFilePaths streamed = writeLayerFiles(bounded, folder.path("bounded"));
+  const LayerFilePaths whole = writeLayerFiles(reference.toLogOddsRaster(), folder.path("whole"));
+  EXPECT_TRUE(readAll(streamed.npy) == readAll(whole.npy));
+  const LogOddsRaster read_back = readLayerFiles(streamed.yaml);  // its CRC-32 checked
+  EXPECT_EQ(read_back.origin_cell, reference.toLogOddsRaster().origin_cell);
+  EXPECT_LE(tilesInMemory(bounded), kBoundTiles);
+  GridLayer2D empty(laserLayerConfig(VoxelMapConfig()));
+  EXPECT_TRUE(readAll(writeLayerFiles(empty, folder.path("empty")).npy) ==
+              readAll(writeLayerFiles(empty.toLogOddsRaster(), folder.path("empty_whole")).npy));
 }
 
 TEST(GridLayerSpill, ACheckpointResumesTheLayerExactlyAndLaterSpillsAreDiscarded) {

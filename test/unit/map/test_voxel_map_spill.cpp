@@ -4,10 +4,12 @@
 // fills up falls back to dropping blocks, observably; a bad store is refused naming its folder.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -319,6 +321,54 @@ TEST_F(VoxelMapSpill, ReadersInParallelWithASpillingWriterReadRight) {
                              Eigen::Vector3d(kFixedBlocks * edge, 0.5 * edge, 0.5 * edge),
                              [&](const VoxelIndex&, float) { ++fixed_known; });
   EXPECT_EQ(fixed_known, static_cast<std::size_t>(kFixedBlocks));
+}
+
+// Two writers on the same blocks, each bringing spilled blocks back and spilling others: a
+// block read from the store before its writer's exclusive lock may have been paged in, written
+// and spilled again by the other writer meanwhile; that copy must not be taken (a write would be
+// lost). Every write adds 0.25 (exact in float, no clamping), so the result does not depend on
+// the order.
+TEST_F(VoxelMapSpill, WritersReadingAheadOfTheLockLoseNoWrite) {
+  VoxelMap map(boundedConfig(BlockStorage::kDense, path("store")));
+  constexpr int kSide = 12;  // 144 blocks, the bound holds 40
+  constexpr int kCalls = 400;
+  std::vector<std::atomic<int>> writes(kSide * kSide);
+  auto writer = [&](unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<int> coordinate(0, kSide - 1);
+    for (int call = 0; call < kCalls; ++call) {
+      std::vector<BlockIndex> blocks;
+      for (int i = 0; i < 6; ++i) {
+        const BlockIndex block(coordinate(rng), coordinate(rng), 0);
+        if (std::find(blocks.begin(), blocks.end(), block) == blocks.end()) blocks.push_back(block);
+      }
+      // The focus follows this writer's blocks: the other writer's recent blocks leave memory.
+      map.setFocus(((blocks.front().cast<double>().array() + 0.5) * 0.8).matrix());
+      map.updateBlocks(blocks, [](const BlockIndex&, VoxelBlock& voxels) {
+        voxels.update(0, 0.25f, -100.0f, 100.0f);
+      });
+      for (const BlockIndex& block : blocks) ++writes[block.y() * kSide + block.x()];
+    }
+  };
+  std::thread first(writer, 1u), second(writer, 2u);
+  first.join();
+  second.join();
+  const SpillStatus status = map.spillStatus();
+  ASSERT_TRUE(status.enabled) << status.last_error;
+  EXPECT_EQ(status.failures, 0u) << status.last_error;
+  EXPECT_GT(status.blocks_read_ahead, 100u);
+  EXPECT_GT(map.spillStatus().spilled_blocks, 50u);
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      const int n = writes[y * kSide + x];
+      if (n == 0) continue;
+      const std::optional<float> value = map.logOdds(BlockIndex(x, y, 0) * VoxelBlock::kSide);
+      ASSERT_TRUE(value.has_value()) << x << " " << y;
+      EXPECT_EQ(*value, 0.25f * n) << "block " << x << " " << y;
+    }
+  }
+  std::printf("read ahead %zu, read again under the lock %zu\n", status.blocks_read_ahead,
+              status.blocks_read_under_lock);
 }
 
 // A store that fills up: the blocks that no longer fit are dropped as without a store, the map
