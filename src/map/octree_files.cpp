@@ -13,7 +13,6 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_map>
 #include <utility>
 
 #include <octomap/OcTree.h>
@@ -557,7 +556,7 @@ OctreeBlockSource blockSourceOf(const VoxelMap& map) {
 }
 
 OctreeBlockSource blockSourceOf(const std::vector<VoxelMap::BlockCopy>& blocks) {
-  auto positions = std::make_shared<std::unordered_map<std::uint64_t, std::size_t>>();
+  auto positions = std::make_shared<SpatialKeyMap<std::size_t>>();
   OctreeBlockSource source;
   source.blocks.reserve(blocks.size());
   for (std::size_t i = 0; i < blocks.size(); ++i) {
