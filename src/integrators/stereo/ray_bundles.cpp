@@ -1,5 +1,8 @@
 #include "ray_bundles.h"
 
+#include <omp.h>
+
+#include <algorithm>
 #include <cmath>
 
 #include "occupancy_fusion/integrators/ray_traversal.h"
@@ -54,46 +57,99 @@ bool isUsableRay(const Eigen::Vector3d& point, float sigma, const Eigen::Vector3
   return isUsable(point, origin, resolution, needs_direction) && std::isfinite(sigma) && sigma >= 0;
 }
 
+namespace {
+
+struct Bundle {
+  std::uint64_t key;
+  std::uint32_t nearest, farthest;
+  double nearest_squared_range, farthest_squared_range;
+};
+
+// The end voxels' bundles of points [first, last), in the order of each voxel's first point.
+struct Bundles {
+  std::vector<Bundle> list;
+  SpatialKeyMap<std::uint32_t> of_voxel;  // key -> position in list
+  std::size_t skipped = 0;
+};
+
+void groupByEndVoxel(const std::vector<EndVoxel>& ends, std::uint32_t first, std::uint32_t last,
+                     Bundles* out) {
+  // Room for a bundle per eight points up front: growing the table rehashes every entry again.
+  out->of_voxel.reserve((last - first) / 8);
+  out->list.reserve((last - first) / 8);
+  std::uint64_t last_key = kUnusableRay;
+  Bundle* bundle = nullptr;
+  for (std::uint32_t i = first; i < last; ++i) {
+    const auto [key, squared_range] = ends[i];
+    if (key == kUnusableRay) {
+      ++out->skipped;
+      continue;
+    }
+    if (key != last_key) {
+      const auto [it, inserted] =
+          out->of_voxel.try_emplace(key, static_cast<std::uint32_t>(out->list.size()));
+      if (inserted) out->list.push_back({key, i, i, squared_range, squared_range});
+      last_key = key;
+      bundle = &out->list[it->second];
+    }
+    if (squared_range < bundle->nearest_squared_range) {  // ties: the first point
+      bundle->nearest = i;
+      bundle->nearest_squared_range = squared_range;
+    }
+    if (squared_range > bundle->farthest_squared_range) {
+      bundle->farthest = i;
+      bundle->farthest_squared_range = squared_range;
+    }
+  }
+}
+
+// Appends a later part's bundles: a voxel already there keeps its place and takes the later
+// point only when it is strictly nearer (farther), as one pass over both parts would.
+void appendLater(const Bundles& later, Bundles* bundles) {
+  for (const Bundle& theirs : later.list) {
+    const auto [it, inserted] =
+        bundles->of_voxel.try_emplace(theirs.key, static_cast<std::uint32_t>(bundles->list.size()));
+    if (inserted) {
+      bundles->list.push_back(theirs);
+      continue;
+    }
+    Bundle& ours = bundles->list[it->second];
+    if (theirs.nearest_squared_range < ours.nearest_squared_range) {
+      ours.nearest = theirs.nearest;
+      ours.nearest_squared_range = theirs.nearest_squared_range;
+    }
+    if (theirs.farthest_squared_range > ours.farthest_squared_range) {
+      ours.farthest = theirs.farthest;
+      ours.farthest_squared_range = theirs.farthest_squared_range;
+    }
+  }
+  bundles->skipped += later.skipped;
+}
+
+}  // namespace
+
 std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3f>& points,
                                                 const std::vector<float>& sigmas,
                                                 const Eigen::Vector3d& origin, double resolution,
                                                 bool visibility_mode, std::size_t* skipped) {
   const bool needs_direction = visibility_mode, needs_depth = visibility_mode;
-  struct Bundle {
-    std::uint32_t nearest, farthest;
-    double nearest_squared_range, farthest_squared_range;
-  };
   const std::vector<EndVoxel> ends = endVoxels(points, sigmas, origin, resolution, needs_direction);
-  std::vector<Bundle> bundles;
-  SpatialKeyMap<std::uint32_t> bundle_of_voxel;
-  std::uint64_t last_key = kUnusableRay;
-  std::uint32_t last_bundle = 0;
-  for (std::uint32_t i = 0; i < ends.size(); ++i) {
-    const auto [key, squared_range] = ends[i];
-    if (key == kUnusableRay) {
-      ++*skipped;
-      continue;
-    }
-    if (key != last_key) {
-      const auto [it, inserted] =
-          bundle_of_voxel.try_emplace(key, static_cast<std::uint32_t>(bundles.size()));
-      if (inserted) bundles.push_back({i, i, squared_range, squared_range});
-      last_key = key;
-      last_bundle = it->second;
-    }
-    Bundle& bundle = bundles[last_bundle];
-    if (squared_range < bundle.nearest_squared_range) {  // ties: the first point
-      bundle.nearest = i;
-      bundle.nearest_squared_range = squared_range;
-    }
-    if (squared_range > bundle.farthest_squared_range) {
-      bundle.farthest = i;
-      bundle.farthest_squared_range = squared_range;
-    }
+  // Consecutive parts of the points grouped on every thread, then joined in order: the same
+  // bundles, in the same order, as one pass (and as on one thread).
+  const int parts = ends.size() >= kParallelPoints ? std::max(1, omp_get_max_threads()) : 1;
+  std::vector<Bundles> grouped(parts);
+  const auto count = static_cast<std::uint32_t>(ends.size());
+#pragma omp parallel for schedule(static, 1) num_threads(parts) if (parts > 1)
+  for (int part = 0; part < parts; ++part) {
+    groupByEndVoxel(ends, static_cast<std::uint32_t>(std::uint64_t{count} * part / parts),
+                    static_cast<std::uint32_t>(std::uint64_t{count} * (part + 1) / parts),
+                    &grouped[part]);
   }
+  for (int part = 1; part < parts; ++part) appendLater(grouped[part], &grouped[0]);
+  *skipped += grouped[0].skipped;
   std::vector<std::uint32_t> rays;
-  rays.reserve(2 * bundles.size());
-  for (const Bundle& bundle : bundles) {
+  rays.reserve(2 * grouped[0].list.size());
+  for (const Bundle& bundle : grouped[0].list) {
     rays.push_back(bundle.nearest);
     if (needs_depth && bundle.farthest != bundle.nearest) rays.push_back(bundle.farthest);
   }

@@ -81,7 +81,7 @@ std::uint64_t voxelKey(const VoxelIndex& index, const VoxelIndex& origin) {
 // The frame's updates, one entry per voxel, reduced on insertion. Entries live
 // in a vector so that the previous-ray cache can keep their positions (a
 // robin-hood table moves its values).
-class FrameUpdates {
+class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache line
  public:
   void reserve(std::size_t voxels) {
     slots_.reserve(voxels);

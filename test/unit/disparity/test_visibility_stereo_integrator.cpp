@@ -1,6 +1,7 @@
 // The visibility-aware stereo integrator: Eq. 1-8 by hand, on hand-built maps, and the OctoMap
 // mode against the OctoMap-equivalent point-cloud integrator.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -411,6 +412,48 @@ TEST(VisibilityStereoIntegratorTest, BundledRaysAreTheNearestAndFarthestPointPer
   EXPECT_EQ(stats.voxel_visits, nearest_stats.voxel_visits);
   // The other points' rays did add updates of their own, which bundling leaves out.
   EXPECT_NE(asTable(bundled), asTable(unbundled));
+}
+
+// From 8192 points on, the grouping runs in consecutive parts on every thread and joins them in
+// order: the same rays as one pass, also for voxels whose points straddle a part boundary, with
+// equal ranges on both sides of it (the first point counts) and a nearer point after it.
+TEST(VisibilityStereoIntegratorTest, BundlingInPartsEqualsOnePass) {
+  VoxelMap map(mapConfig());
+  scatter(7, &map);
+  RandomFrame frame;
+  for (unsigned seed = 20; frame.points.size() < 20000; ++seed) {
+    const RandomFrame more = crowdedFrame(seed);
+    frame.points.insert(frame.points.end(), more.points.begin(), more.points.end());
+    frame.sigmas.insert(frame.sigmas.end(), more.sigmas.begin(), more.sigmas.end());
+  }
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(3);  // parts end at a third and two thirds of the points
+  // Two voxels of their own, in front of the crowd (nothing hides them), each with points on both
+  // sides of a boundary. At the first, the nearest point's copy (another sigma) after it ties and
+  // must not count, a farther point after it becomes the farthest; at the second, a nearer point
+  // after it becomes the nearest and the farthest point's copy after it ties.
+  const std::size_t first = frame.points.size() / 3, second = 2 * frame.points.size() / 3;
+  const auto place = [&](std::size_t i, const Eigen::Vector3f& point, float sigma) {
+    frame.points[i] = point;
+    frame.sigmas[i] = sigma;
+  };
+  const Eigen::Vector3f a(0.72f, 0.05f, 0.05f), a_farther(0.78f, 0.05f, 0.05f);
+  place(first - 2, a, 0.05f);
+  place(first + 1, a, 0.15f);
+  place(first + 3, a_farther, 0.05f);
+  const Eigen::Vector3f b(0.88f, 0.15f, 0.05f), b_nearer(0.82f, 0.15f, 0.05f);
+  place(second - 2, b, 0.05f);
+  place(second + 1, b_nearer, 0.05f);
+  place(second + 3, b, 0.15f);
+  const RandomFrame ends = endsPerVoxel(frame, kOrigin);
+  std::vector<StereoVoxelUpdate> bundled, expected;
+  const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
+      frame.points, frame.sigmas, kOrigin, map, &bundled);
+  omp_set_num_threads(before);
+  VisibilityStereoIntegrator(perRay()).computeUpdates(ends.points, ends.sigmas, kOrigin, map,
+                                                      &expected);
+  EXPECT_EQ(stats.rays, ends.points.size());
+  EXPECT_EQ(asTable(bundled), asTable(expected));
 }
 
 TEST(VisibilityStereoIntegratorTest, BundlingChangesNothingWithOnePointPerVoxel) {
