@@ -34,23 +34,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-bool loadNodelet(const std::string& manager, const std::string& name, const std::string& type,
-                 const std::vector<std::pair<std::string, std::string>>& remappings = {}) {
-  nodelet::NodeletLoad load;
-  load.request.name = name;
-  load.request.type = type;
-  for (const auto& [from, to] : remappings) {
-    load.request.remap_source_args.push_back(from);
-    load.request.remap_target_args.push_back(to);
-  }
-  return ros::service::call(manager + "/load_nodelet", load) && load.response.success;
-}
-
 // The map's parameters, as every nodelet of a shared map reads them.
 void setMapParameters(const std::string& name, const std::string& store) {
   ros::param::set(name + "/map_name", std::string("map"));
@@ -101,10 +84,10 @@ TEST(MapCheckpointResume, ManagerKilledWithSigkillResumesItsLastCheckpoint) {
     setMapParameters(name, store);
   }
   ros::param::set("/map_server_a/publish_rate", 5.0);
-  ASSERT_TRUE(loadNodelet("/manager", "/map_server_a", "occupancy_fusion/MapServer"));
-  ASSERT_TRUE(loadNodelet("/manager", "/point_cloud_mapper", "occupancy_fusion/PointCloudMapper",
+  ASSERT_TRUE(loadNodelet("/map_server_a", "occupancy_fusion/MapServer"));
+  ASSERT_TRUE(loadNodelet("/point_cloud_mapper", "occupancy_fusion/PointCloudMapper",
                           {{"/cloud_in", "/camera/depth/points"}}));
-  ASSERT_TRUE(loadNodelet("/manager", "/laser_mapper", "occupancy_fusion/LaserMapper"));
+  ASSERT_TRUE(loadNodelet("/laser_mapper", "occupancy_fusion/LaserMapper"));
   constexpr const char* kServerA = "map_server_a: map publishing";
   ASSERT_TRUE(waitUntil(
       [&] {
@@ -136,7 +119,7 @@ TEST(MapCheckpointResume, ManagerKilledWithSigkillResumesItsLastCheckpoint) {
 
   // 3. A MapServer on the same store, in another process.
   setMapParameters("/map_server_b", store);
-  ASSERT_TRUE(loadNodelet("/manager_b", "/map_server_b", "occupancy_fusion/MapServer"));
+  ASSERT_TRUE(loadNodelet("/map_server_b", "occupancy_fusion/MapServer", {}, "/manager_b"));
   const std::string resumed = (folder / "after").string();
   ASSERT_TRUE(save("/map_server_b/save_map", resumed).response.success);
   for (const char* extension : {".ot", ".bt", ".laser.npy"}) {

@@ -45,29 +45,6 @@ namespace fs = std::filesystem;
 
 constexpr double kResolution = 0.05;  // config/point_cloud_mapper.yaml
 
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-bool loadNodelet(const std::string& name, const std::string& type,
-                 const std::vector<std::pair<std::string, std::string>>& remappings = {}) {
-  nodelet::NodeletLoad load;
-  load.request.name = name;
-  load.request.type = type;
-  for (const auto& [from, to] : remappings) {
-    load.request.remap_source_args.push_back(from);
-    load.request.remap_target_args.push_back(to);
-  }
-  return ros::service::call("/manager/load_nodelet", load) && load.response.success;
-}
-
-bool unloadNodelet(const std::string& name) {
-  nodelet::NodeletUnload unload;
-  unload.request.name = name;
-  return ros::service::call("/manager/unload_nodelet", unload) && unload.response.success;
-}
-
 void setMapServerParameters(const std::string& name, const std::string& load_map,
                             const std::string& save_on_shutdown, const std::string& save_prefix) {
   ros::param::set(name + "/map_name", std::string("map"));

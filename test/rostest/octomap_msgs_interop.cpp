@@ -43,11 +43,6 @@ constexpr char kOctomapMsgsMd5[] = "9a45536b45c5e409cd49f04bb2d9999f";
 
 constexpr int kMinClouds = 5;  // enough for a few thousand leaves at 0.05 m
 
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 // The "key: value" lines a command printed.
 std::map<std::string, std::string> keyValues(const std::string& output) {
   std::map<std::string, std::string> values;

@@ -8,13 +8,16 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <tuple>
 #include <typeindex>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -22,6 +25,8 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <nav_msgs/OccupancyGrid.h>
+#include <nodelet/NodeletLoad.h>
+#include <nodelet/NodeletUnload.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -344,6 +349,32 @@ inline sensor_msgs::Image floatImage(const std::vector<float>& values, int width
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(values.data());
   image.data.assign(bytes, bytes + values.size() * sizeof(float));
   return image;
+}
+
+// A file's bytes ("" when it cannot be read).
+inline std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Loads / unloads a nodelet in a running manager through its services, as `nodelet load` and
+// `nodelet unload` do. remappings: (from, to) names for the nodelet.
+inline bool loadNodelet(const std::string& name, const std::string& type,
+                        const std::vector<std::pair<std::string, std::string>>& remappings = {},
+                        const std::string& manager = "/manager") {
+  nodelet::NodeletLoad load;
+  load.request.name = name;
+  load.request.type = type;
+  for (const auto& [from, to] : remappings) {
+    load.request.remap_source_args.push_back(from);
+    load.request.remap_target_args.push_back(to);
+  }
+  return ros::service::call(manager + "/load_nodelet", load) && load.response.success;
+}
+inline bool unloadNodelet(const std::string& name, const std::string& manager = "/manager") {
+  nodelet::NodeletUnload unload;
+  unload.request.name = name;
+  return ros::service::call(manager + "/unload_nodelet", unload) && unload.response.success;
 }
 
 // Runs a shell command; its output (stdout and stderr) and, in exit_code, pclose's status.
