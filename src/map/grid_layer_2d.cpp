@@ -168,18 +168,14 @@ GridChanges GridLayer2D::visitChangedTiles(
     std::uint64_t version, const TileFn& tile,
     const std::function<void(const GridChanges&)>& commit) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
-  GridChanges changes;
-  changes.version = version_;
-  std::vector<std::uint64_t> changed;
-  if (!change_log_.collectSince(version, &changed, nullptr)) {
-    changes.full_rebuild = true;
+  const GridChanges changes = changesSinceLocked(version);
+  if (changes.full_rebuild) {
     forEachTileLocked(tile);
   } else {
     GridTile scratch;
-    for (std::uint64_t key : changed) {
-      const GridTile* found = readTile(key, &scratch);
-      if (found != nullptr) tile(unpackKey2(key), *found);
-      changes.changed.push_back(unpackKey2(key));
+    for (const TileIndex& index : changes.changed) {
+      const GridTile* found = readTile(packKey(index), &scratch);
+      if (found != nullptr) tile(index, *found);
     }
   }
   commit(changes);
@@ -436,6 +432,10 @@ LogOddsRaster GridLayer2D::toLogOddsRaster() const {
 
 GridChanges GridLayer2D::changesSince(std::uint64_t version) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
+  return changesSinceLocked(version);
+}
+
+GridChanges GridLayer2D::changesSinceLocked(std::uint64_t version) const {
   GridChanges changes;
   changes.version = version_;
   std::vector<std::uint64_t> changed;

@@ -198,6 +198,7 @@ class GridLayer2D {
   // Calls fn for every tile, those in memory first, then the stored ones one at a time.
   void forEachTileLocked(const TileFn& fn) const;
   void enforceBound();  // caller holds the unique lock
+  GridChanges changesSinceLocked(std::uint64_t version) const;
   void markWritten(std::uint64_t key, GridTile* tile);
   void finishWrite();  // trims the change log, bumps the version
   // Calls write_cell(tile, linear index in tile, value) for each non-NaN value of a dense window
