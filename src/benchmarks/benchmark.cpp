@@ -353,12 +353,15 @@ const std::vector<Workload>& workloads() {
        runCheckpoint},
       {"spill",
        "[--length M] [--step S] [--resolution R] [--bound_mb B [--spill_folder F]]\n"
-       "      [--return 1] [--width W --height H] [--csv PATH] [--save PREFIX [--save_liboctomap 1]]\n"
+       "      [--return 1] [--width W --height H] [--csv PATH] [--save PREFIX [--save_liboctomap "
+       "1]]\n"
+       "      [--laser 0|1] [--layer_bound_mb L]\n"
        "      a depth camera along M metres of corridor with a room every 8 m into a map with\n"
-       "      or without a memory bound; per frame integration time and resident memory; the\n"
-       "      save's time and peak memory (streamed; and through liboctomap's OcTree)",
+       "      or without a memory bound, and a laser scanner into its 2D layer (bound L);\n"
+       "      per frame integration time and resident memory; the save's time and peak memory\n"
+       "      (streamed; and through liboctomap's OcTree)",
        {"length", "step", "resolution", "bound_mb", "spill_folder", "return", "width", "height",
-        "csv", "save", "save_liboctomap"},
+        "csv", "save", "save_liboctomap", "laser", "layer_bound_mb"},
        runSpill},
   };
   return table;
