@@ -194,6 +194,7 @@ std::optional<StoredBlock> VoxelMap::adoptSpilled(std::uint64_t key, const Voxel
 
 VoxelMap::ReadAhead VoxelMap::readSpilledAhead(const std::vector<BlockIndex>& blocks) const {
   ReadAhead ahead;
+  if (store_ == nullptr) return ahead;  // set at construction only: no lock for a map without one
   {
     std::shared_lock<std::shared_mutex> lock(mutex_);
     if (spilled_.empty()) return ahead;
