@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <vector>
@@ -29,7 +30,6 @@ struct BucketExtremes {
   float max1 = -kInfinity, max2 = -kInfinity;
   float min1 = kInfinity, min2 = kInfinity;
 
-  bool empty() const { return max1 == -kInfinity; }
   void addMax(float x) {
     if (x > max1) {
       max2 = max1;
@@ -65,42 +65,75 @@ struct BucketExtremes {
 // children exactly. The second values decide whether the float score |d - t_j| of the winner is
 // shared by another distance of the cell (rounding, or one on each side of t_j): the scan would
 // then keep the first such pixel in its order, so such a cell is scanned instead.
+// A cell's distances fall into one or two of the (up to 25) buckets: a bit mask per cell says
+// which hold any, so that merges and reads touch only those, and a resize clears only the masks.
 class DistanceBuckets {
  public:
-  explicit DistanceBuckets(const std::vector<float>& thresholds)
-      : thresholds_(thresholds), buckets_(static_cast<int>(thresholds.size()) + 1) {}
+  // Kept from frame to frame (thread_local in buildClosestLayers): at 8 x 8 px cells the table of
+  // extremes is about 1 MB, which a fresh allocation would fill (and fault in) every frame.
+  void setThresholds(const std::vector<float>& thresholds) {
+    thresholds_ = thresholds;
+    buckets_ = static_cast<int>(thresholds.size()) + 1;
+  }
 
   void resize(int width, int height) {
     width_ = width;
     height_ = height;
-    cells_.assign(static_cast<std::size_t>(width) * height * buckets_, BucketExtremes());
+    const std::size_t cells = static_cast<std::size_t>(width) * height;
+    masks_.assign(cells, 0);
+    // Stale extremes stay: a bucket is read only once its bit is set, which overwrites them.
+    if (extremes_.size() < cells * buckets_) extremes_.resize(cells * buckets_);
   }
   int width() const { return width_; }
   int height() const { return height_; }
-  BucketExtremes* cell(int u, int v) {
-    return &cells_[(static_cast<std::size_t>(v) * width_ + u) * buckets_];
-  }
-  const BucketExtremes* cell(int u, int v) const {
-    return &cells_[(static_cast<std::size_t>(v) * width_ + u) * buckets_];
-  }
+  std::size_t cellIndex(int u, int v) const { return static_cast<std::size_t>(v) * width_ + u; }
   int bucketOf(float distance) const {
     int bucket = 0;
     for (float threshold : thresholds_) bucket += threshold > distance;
     return bucket;
   }
-  void mergeCell(const BucketExtremes* child, BucketExtremes* parent) const {
-    for (int k = 0; k < buckets_; ++k) parent[k].merge(child[k]);
+  void set(std::size_t cell, int bucket, const BucketExtremes& extremes) {
+    masks_[cell] |= 1u << bucket;
+    extremes_[cell * buckets_ + bucket] = extremes;
+  }
+  void add(std::size_t cell, float distance) {
+    const int bucket = bucketOf(distance);
+    BucketExtremes& extremes = extremes_[cell * buckets_ + bucket];
+    if (!(masks_[cell] >> bucket & 1u)) {
+      masks_[cell] |= 1u << bucket;
+      extremes = BucketExtremes();
+    }
+    extremes.add(distance);
+  }
+  // The child cell's buckets into the parent cell of `parent` (which has as many buckets).
+  void mergeInto(std::size_t child, DistanceBuckets* parent, std::size_t parent_cell) const {
+    for (std::uint32_t mask = masks_[child]; mask != 0; mask &= mask - 1) {
+      const int k = __builtin_ctz(mask);
+      const BucketExtremes& theirs = extremes_[child * buckets_ + k];
+      if (parent->masks_[parent_cell] >> k & 1u) {
+        parent->extremes_[parent_cell * buckets_ + k].merge(theirs);
+      } else {
+        // Merging into an empty bucket copies (max2 < max1 and min2 > min1 hold in every cell).
+        parent->set(parent_cell, k, theirs);
+      }
+    }
   }
   // The distance of the cell closest to t_level as the scan keeps it (NaN: no valid one);
   // false when another distance of the cell has the same score, i.e. the scan order decides.
-  bool closest(const BucketExtremes* cell, int level, float* kept) const;
+  bool closest(std::size_t cell, int level, float* kept) const;
 
  private:
+  bool has(std::size_t cell, int bucket) const { return masks_[cell] >> bucket & 1u; }
+  const BucketExtremes& at(std::size_t cell, int bucket) const {
+    return extremes_[cell * buckets_ + bucket];
+  }
+
   std::vector<float> thresholds_;
-  int buckets_;
+  int buckets_ = 1;
   int width_ = 0;
   int height_ = 0;
-  std::vector<BucketExtremes> cells_;
+  std::vector<std::uint32_t> masks_;      // per cell: bit k set when bucket k holds a distance
+  std::vector<BucketExtremes> extremes_;  // per cell and bucket; valid where the bit is set
 };
 
 namespace {
@@ -110,31 +143,32 @@ long cellBucketCount(const DistanceBuckets& buckets, int levels) {
 }
 }  // namespace
 
-bool DistanceBuckets::closest(const BucketExtremes* cell, int level, float* kept) const {
+bool DistanceBuckets::closest(std::size_t cell, int level, float* kept) const {
   const float target = thresholds_[static_cast<std::size_t>(level)];
-  if (cell[level].min1 == target) {  // score 0, and only t_level itself scores 0
+  if (has(cell, level) && at(cell, level).min1 == target) {
+    // score 0, and only t_level itself scores 0
     *kept = target;
     return true;
   }
   // Below t_level: buckets level + 1 ... L; at or above: buckets level ... 0.
   float below = -kInfinity, below_next = -kInfinity;
   for (int k = level + 1; k < buckets_ && below_next == -kInfinity; ++k) {
-    if (cell[k].empty()) continue;
+    if (!has(cell, k)) continue;
     if (below == -kInfinity) {
-      below = cell[k].max1;
-      below_next = cell[k].max2;
+      below = at(cell, k).max1;
+      below_next = at(cell, k).max2;
     } else {
-      below_next = cell[k].max1;
+      below_next = at(cell, k).max1;
     }
   }
   float above = kInfinity, above_next = kInfinity;
   for (int k = level; k >= 0 && above_next == kInfinity; --k) {
-    if (cell[k].empty()) continue;
+    if (!has(cell, k)) continue;
     if (above == kInfinity) {
-      above = cell[k].min1;
-      above_next = cell[k].min2;
+      above = at(cell, k).min1;
+      above_next = at(cell, k).min2;
     } else {
-      above_next = cell[k].min1;
+      above_next = at(cell, k).min1;
     }
   }
   const float below_score = std::abs(below - target);  // the scan's score, same float steps
@@ -149,6 +183,44 @@ bool DistanceBuckets::closest(const BucketExtremes* cell, int level, float* kept
   const float runner_up = take_below ? below_next : above_next;
   *kept = winner;
   return std::abs(runner_up - target) != std::abs(winner - target);
+}
+
+namespace {
+
+// The layers' storage of the frames a thread built before: M alone is 1.2 MB at 640 x 480, and
+// glibc maps a block that large anew for each allocation, so every frame would fault its pages
+// in again (a page fault per 4 KiB).
+constexpr std::size_t kMaxSpareLayers = 32;
+std::vector<std::vector<float>>& spareLayers() {
+  thread_local std::vector<std::vector<float>> spare;
+  return spare;
+}
+
+// A spare buffer of at least `size` floats if there is one (the smallest such), else a new one;
+// its contents are left as they were.
+std::vector<float> takeLayerBuffer(std::size_t size) {
+  std::vector<std::vector<float>>& spare = spareLayers();
+  auto best = spare.end();
+  for (auto it = spare.begin(); it != spare.end(); ++it) {
+    if (it->capacity() >= size && (best == spare.end() || it->capacity() < best->capacity())) {
+      best = it;
+    }
+  }
+  if (best == spare.end()) return {};
+  std::vector<float> buffer = std::move(*best);
+  spare.erase(best);
+  return buffer;
+}
+
+}  // namespace
+
+DistancePyramid::~DistancePyramid() {
+  std::vector<std::vector<float>>& spare = spareLayers();
+  for (Layer& layer : layers_) {
+    if (layer.cells.capacity() > 0 && spare.size() < kMaxSpareLayers) {
+      spare.push_back(std::move(layer.cells));
+    }
+  }
 }
 
 DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
@@ -171,7 +243,9 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
   Layer& distances = layers_[0];
   distances.width = camera.width;
   distances.height = camera.height;
-  distances.cells.resize(static_cast<std::size_t>(camera.width) * camera.height);
+  const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+  distances.cells = takeLayerBuffer(pixels);
+  distances.cells.resize(pixels);  // every cell is written below
   // Eq. 6: distance = z |pixelRay(u, v)|, the ray's squared x and y per column and row, so the
   // loop over pixels is branch-free and vectorises (one sqrt per pixel, no division).
   std::vector<double> ray_x2(static_cast<std::size_t>(camera.width));
@@ -194,8 +268,10 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
       for (int u = 0; u < camera.width; ++u) {
         const float z = depth_row[u];
         const double measured = z * std::sqrt(ray_x2[u] + ray_y2 + 1.0);
-        // Invalid: z <= 0, NaN, infinite, or beyond max_range (NaN compares false).
-        row[u] = z > 0.0f && measured <= max_range ? static_cast<float>(measured) : kNaN;
+        // Invalid: z <= 0, NaN, infinite, or beyond max_range (NaN compares false). `&`, not
+        // `&&`: no branch, so the loop vectorises.
+        const bool valid = (z > 0.0f) & (measured <= max_range);
+        row[u] = valid ? static_cast<float>(measured) : kNaN;
       }
       for (int u = 0; u < camera.width; ++u) {
         column_farthest[u] = row[u] > column_farthest[u] ? row[u] : column_farthest[u];
@@ -229,7 +305,9 @@ void DistancePyramid::sizeLayer(int level) {
   const int side = 1 << level;
   layer.width = (full.width + side - 1) / side;
   layer.height = (full.height + side - 1) / side;
-  layer.cells.assign(static_cast<std::size_t>(layer.width) * layer.height, kNaN);
+  const std::size_t cells = static_cast<std::size_t>(layer.width) * layer.height;
+  layer.cells = takeLayerBuffer(cells);
+  layer.cells.assign(cells, kNaN);
 }
 
 void DistancePyramid::buildMinimumLayers() {
@@ -285,7 +363,9 @@ void DistancePyramid::buildClosestLayers(int first_read_level) {
   for (int level = 0; level < levels(); ++level) {
     targets[level] = static_cast<float>(threshold(level));
   }
-  DistanceBuckets coarse(targets), finer(targets);
+  thread_local DistanceBuckets coarse, finer;
+  coarse.setThresholds(targets);
+  finer.setThresholds(targets);
   fillBuckets(kScannedLevels, &coarse);
   takeClosest(coarse, kScannedLevels);
   for (int level = kScannedLevels + 1; level < levels(); ++level) {
@@ -295,9 +375,10 @@ void DistancePyramid::buildClosestLayers(int first_read_level) {
 #pragma omp parallel for schedule(static) if (parallel)
     for (int v = 0; v < coarse.height(); ++v) {
       for (int u = 0; u < coarse.width(); ++u) {
+        const std::size_t parent = coarse.cellIndex(u, v);
         for (int child_v = 2 * v; child_v < std::min(finer.height(), 2 * v + 2); ++child_v) {
           for (int child_u = 2 * u; child_u < std::min(finer.width(), 2 * u + 2); ++child_u) {
-            finer.mergeCell(finer.cell(child_u, child_v), coarse.cell(u, v));
+            finer.mergeInto(finer.cellIndex(child_u, child_v), &coarse, parent);
           }
         }
       }
@@ -306,46 +387,103 @@ void DistancePyramid::buildClosestLayers(int first_read_level) {
   }
 }
 
+namespace {
+
+// Per pixel column of a strip of rows: the smallest and largest valid value, then the smallest
+// above and the largest below the column's cell's own extremes. Each pass is elementwise over
+// whole rows with branch-free selects, so it vectorises; NaN never compares, so invalid pixels
+// drop out, as in BucketExtremes::add.
+class StripExtremes {
+ public:
+  // Rows [v_begin, v_end) of M, `side` px cells.
+  void measure(const float* cells, int width, int v_begin, int v_end, int side) {
+    resize(width);
+    std::fill(min1_.begin(), min1_.end(), kInfinity);
+    std::fill(max1_.begin(), max1_.end(), -kInfinity);
+    for (int v = v_begin; v < v_end; ++v) {
+      const float* row = cells + static_cast<std::size_t>(v) * width;
+      for (int u = 0; u < width; ++u) {
+        min1_[u] = row[u] < min1_[u] ? row[u] : min1_[u];
+        max1_[u] = row[u] > max1_[u] ? row[u] : max1_[u];
+      }
+    }
+    // The cells' extremes, written back to each of their columns for the second pass.
+    for (int first = 0; first < width; first += side) {
+      const int last = std::min(width, first + side);
+      float low = kInfinity, high = -kInfinity;
+      for (int u = first; u < last; ++u) {
+        low = min1_[u] < low ? min1_[u] : low;
+        high = max1_[u] > high ? max1_[u] : high;
+      }
+      std::fill(&min1_[first], &min1_[last], low);
+      std::fill(&max1_[first], &max1_[last], high);
+    }
+    std::fill(min2_.begin(), min2_.end(), kInfinity);
+    std::fill(max2_.begin(), max2_.end(), -kInfinity);
+    for (int v = v_begin; v < v_end; ++v) {
+      const float* row = cells + static_cast<std::size_t>(v) * width;
+      for (int u = 0; u < width; ++u) {
+        const float above = row[u] > min1_[u] ? row[u] : kInfinity;
+        const float below = row[u] < max1_[u] ? row[u] : -kInfinity;
+        min2_[u] = above < min2_[u] ? above : min2_[u];
+        max2_[u] = below > max2_[u] ? below : max2_[u];
+      }
+    }
+  }
+  // The extremes of the cell of columns [first, last): its two smallest and two largest
+  // distinct values.
+  BucketExtremes cell(int first, int last) const {
+    BucketExtremes extremes;
+    extremes.min1 = min1_[first];
+    extremes.max1 = max1_[first];
+    for (int u = first; u < last; ++u) {
+      extremes.min2 = min2_[u] < extremes.min2 ? min2_[u] : extremes.min2;
+      extremes.max2 = max2_[u] > extremes.max2 ? max2_[u] : extremes.max2;
+    }
+    return extremes;
+  }
+
+ private:
+  void resize(int width) {
+    min1_.resize(width);
+    min2_.resize(width);
+    max1_.resize(width);
+    max2_.resize(width);
+  }
+  std::vector<float> min1_, min2_, max1_, max2_;
+};
+
+}  // namespace
+
 void DistancePyramid::fillBuckets(int level, DistanceBuckets* buckets) const {
   const Layer& full = layers_[0];
   buckets->resize(layers_[level].width, layers_[level].height);
   const int side = 1 << level;
-#pragma omp parallel for schedule(static)
-  for (int cell_v = 0; cell_v < buckets->height(); ++cell_v) {
-    const int v_begin = cell_v * side;
-    const int v_end = std::min(full.height, v_begin + side);
-    for (int cell_u = 0; cell_u < buckets->width(); ++cell_u) {
-      const int u_begin = cell_u * side;
-      const int u_end = std::min(full.width, u_begin + side);
-      // Most cells lie within one bucket: then its extremes are the cell's, found with
-      // branch-free min / max passes (NaN never compares, so invalid pixels drop out).
-      float low = kInfinity, high = -kInfinity;
-      for (int v = v_begin; v < v_end; ++v) {
-        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
-        for (int u = u_begin; u < u_end; ++u) {
-          low = row[u] < low ? row[u] : low;
-          high = row[u] > high ? row[u] : high;
+#pragma omp parallel
+  {
+    StripExtremes strip;
+#pragma omp for schedule(static)
+    for (int cell_v = 0; cell_v < buckets->height(); ++cell_v) {
+      const int v_begin = cell_v * side;
+      const int v_end = std::min(full.height, v_begin + side);
+      strip.measure(full.cells.data(), full.width, v_begin, v_end, side);
+      for (int cell_u = 0; cell_u < buckets->width(); ++cell_u) {
+        const int u_begin = cell_u * side;
+        const int u_end = std::min(full.width, u_begin + side);
+        const BucketExtremes extremes = strip.cell(u_begin, u_end);
+        if (extremes.max1 == -kInfinity) continue;  // no valid pixel
+        const std::size_t cell = buckets->cellIndex(cell_u, cell_v);
+        // Most cells lie within one bucket: then its extremes are the cell's.
+        const int bucket = buckets->bucketOf(extremes.min1);
+        if (bucket == buckets->bucketOf(extremes.max1)) {
+          buckets->set(cell, bucket, extremes);
+          continue;
         }
-      }
-      if (high == -kInfinity) continue;  // no valid pixel
-      BucketExtremes* cell = buckets->cell(cell_u, cell_v);
-      const int bucket = buckets->bucketOf(low);
-      if (bucket == buckets->bucketOf(high)) {
-        float low_next = kInfinity, high_next = -kInfinity;
         for (int v = v_begin; v < v_end; ++v) {
           const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
           for (int u = u_begin; u < u_end; ++u) {
-            low_next = row[u] > low && row[u] < low_next ? row[u] : low_next;
-            high_next = row[u] < high && row[u] > high_next ? row[u] : high_next;
+            if (!std::isnan(row[u])) buckets->add(cell, row[u]);
           }
-        }
-        cell[bucket] = {high, high_next, low, low_next};
-        continue;
-      }
-      for (int v = v_begin; v < v_end; ++v) {
-        const float* row = &full.cells[static_cast<std::size_t>(v) * full.width];
-        for (int u = u_begin; u < u_end; ++u) {
-          if (!std::isnan(row[u])) cell[buckets->bucketOf(row[u])].add(row[u]);
         }
       }
     }
@@ -360,7 +498,7 @@ void DistancePyramid::takeClosest(const DistanceBuckets& buckets, int level) {
   for (int v = 0; v < layer.height; ++v) {
     for (int u = 0; u < layer.width; ++u) {
       float& kept = layer.cells[static_cast<std::size_t>(v) * layer.width + u];
-      if (!buckets.closest(buckets.cell(u, v), level, &kept)) {
+      if (!buckets.closest(buckets.cellIndex(u, v), level, &kept)) {
         kept = scanCell(level, u, v, target);  // a tie: the scan order decides
       }
     }

@@ -71,5 +71,62 @@ TEST(DistancePyramid, CoarseLayersEqualAScanWhenFloatScoresTie) {
   EXPECT_GT(coarse_ties, 20);  // the scan order really decides many coarse cells
 }
 
+// Every layer of `pyramid` against the scan, and M against Eq. 6 with the depth itself (the
+// camera's rays are all but parallel). Returns the number of cells compared.
+int expectLayersEqualAScan(const DistancePyramid& pyramid, const CameraIntrinsics& camera,
+                           const std::vector<float>& depth) {
+  int cells = 0;
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const float z = depth[static_cast<std::size_t>(v) * camera.width + u];
+      const float expected = z > 0.0f ? z : std::numeric_limits<float>::quiet_NaN();
+      EXPECT_TRUE(sameBits(pyramid.at(0, u, v), expected)) << "M at " << u << "," << v;
+    }
+  }
+  for (int level = 1; level < pyramid.levels(); ++level) {
+    for (int cv = 0; cv < pyramid.height(level); ++cv) {
+      for (int cu = 0; cu < pyramid.width(level); ++cu, ++cells) {
+        EXPECT_TRUE(
+            sameBits(pyramid.at(level, cu, cv), scanCell(pyramid, camera, level, cu, cv).kept))
+            << "level " << level << " cell " << cu << "," << cv;
+      }
+    }
+  }
+  return cells;
+}
+
+// The layers' storage and the bucket tables pass from one pyramid to the next on a thread: a
+// pyramid after a larger one, with invalid pixels where the earlier one had values, and then a
+// larger one again must not see anything of the earlier ones.
+TEST(DistancePyramid, StorageTakenOverFromEarlierPyramidsHoldsNothingOfThem) {
+  const std::vector<float> values{0.75f, 1.5f, 2.5f, 3.0f, 5.0f, 6.0f, 10.0f, 12.0f, 20.0f, 40.0f};
+  std::mt19937 random(5);
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(values.size()) - 1);
+  const int sizes[3][2] = {{203, 141}, {150, 100}, {260, 170}};
+  for (int image = 0; image < 3; ++image) {
+    CameraIntrinsics camera;
+    camera.width = sizes[image][0];
+    camera.height = sizes[image][1];
+    camera.fx = camera.fy = 1e7;
+    camera.cx = camera.width / 2.0;
+    camera.cy = camera.height / 2.0;
+    std::vector<float> depth(static_cast<std::size_t>(camera.width) * camera.height);
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        // The second image: its left half invalid, its right half within one bucket per cell.
+        const bool invalid = image == 1 && u < camera.width / 2;
+        const float value =
+            image == 1 ? values[(u / 16 + v / 16) % values.size()] : values[pick(random)];
+        depth[static_cast<std::size_t>(v) * camera.width + u] = invalid ? 0.0f : value;
+      }
+    }
+    const DepthImageView view{camera.width, camera.height, depth.data()};
+    const DistancePyramid pyramid(view, camera, 64.0, 10, 1000.0,
+                                  PyramidSelection::kClosestToThreshold);
+    ASSERT_EQ(pyramid.levels(), 10);
+    EXPECT_GT(expectLayersEqualAScan(pyramid, camera, depth), 1000) << "image " << image;
+  }
+}
+
 }  // namespace
 }  // namespace occupancy_fusion

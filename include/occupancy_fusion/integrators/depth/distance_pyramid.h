@@ -32,6 +32,12 @@ class DistancePyramid {
   DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera, double t0,
                   int levels, double max_range, PyramidSelection selection,
                   const std::function<double(double)>& reach_of_farthest = {});
+  // Hands the layers' storage to the next pyramid built on this thread.
+  ~DistancePyramid();
+  DistancePyramid(const DistancePyramid&) = default;
+  DistancePyramid& operator=(const DistancePyramid&) = default;
+  DistancePyramid(DistancePyramid&&) = default;
+  DistancePyramid& operator=(DistancePyramid&&) = default;
 
   // Layers needed for voxels down to min_range: until t_i <= min_range or one cell covers the
   // image, at most max_levels.
