@@ -15,26 +15,44 @@ namespace occupancy_fusion {
 // ---------------------------------------------------------------------------------------------
 // VoxelUpdateSet
 
+std::uint32_t VoxelUpdateSet::slotOf(const BlockIndex& block) {
+  // Unsigned: the products wrap.
+  const auto coordinate = [&block](int axis) { return static_cast<std::uint32_t>(block[axis]); };
+  RecentBlock& recent =
+      recent_[(coordinate(0) * 73856093u ^ coordinate(1) * 19349663u ^ coordinate(2) * 83492791u) %
+              kRecentBlocks];
+  if (recent.block == block) return recent.slot;
+  const std::uint64_t key = packBlock(block);
+  const auto [it, inserted] = slots_.try_emplace(key, static_cast<std::uint32_t>(keys_.size()));
+  if (inserted) {
+    keys_.push_back(key);
+    masks_.emplace_back();
+  }
+  recent = {block, it->second};
+  return it->second;
+}
+
 void VoxelUpdateSet::merge(const VoxelUpdateSet& other) {
-  cached_ = nullptr;
-  blocks_.reserve(blocks_.size() + other.blocks_.size());
-  for (const auto& [key, theirs] : other.blocks_) {
-    BlockMasks& ours = blocks_[key];
+  slots_.reserve(keys_.size() + other.keys_.size());
+  for (std::size_t theirs = 0; theirs < other.keys_.size(); ++theirs) {
+    BlockMasks& ours = masks_[slotOf(unpackBlock(other.keys_[theirs]))];
     for (int w = 0; w < kWords; ++w) {
-      ours.free[w] |= theirs.free[w];
-      ours.occupied[w] |= theirs.occupied[w];
+      ours.free[w] |= other.masks_[theirs].free[w];
+      ours.occupied[w] |= other.masks_[theirs].occupied[w];
     }
   }
 }
 
 void VoxelUpdateSet::clear() {
-  blocks_.clear();
-  cached_ = nullptr;
+  slots_.clear();
+  keys_.clear();
+  masks_.clear();
+  forgetRecentBlocks();
 }
 
 const VoxelUpdateSet::BlockMasks* VoxelUpdateSet::find(const BlockIndex& block) const {
-  const auto it = blocks_.find(packBlock(block));
-  return it == blocks_.end() ? nullptr : &it->second;
+  const auto it = slots_.find(packBlock(block));
+  return it == slots_.end() ? nullptr : &masks_[it->second];
 }
 
 bool VoxelUpdateSet::isOccupied(const VoxelIndex& index) const {
@@ -54,16 +72,15 @@ bool VoxelUpdateSet::isFree(const VoxelIndex& index) const {
 
 std::size_t VoxelUpdateSet::occupiedCount() const {
   std::size_t count = 0;
-  for (const auto& entry : blocks_) {
-    for (std::uint64_t word : entry.second.occupied) count += std::bitset<64>(word).count();
+  for (const BlockMasks& masks : masks_) {
+    for (std::uint64_t word : masks.occupied) count += std::bitset<64>(word).count();
   }
   return count;
 }
 
 std::size_t VoxelUpdateSet::freeCount() const {
   std::size_t count = 0;
-  for (const auto& entry : blocks_) {
-    const BlockMasks& masks = entry.second;
+  for (const BlockMasks& masks : masks_) {
     for (int w = 0; w < kWords; ++w) {
       count += std::bitset<64>(masks.free[w] & ~masks.occupied[w]).count();
     }
@@ -73,8 +90,8 @@ std::size_t VoxelUpdateSet::freeCount() const {
 
 std::vector<BlockIndex> VoxelUpdateSet::blocks() const {
   std::vector<BlockIndex> result;
-  result.reserve(blocks_.size());
-  for (const auto& entry : blocks_) result.push_back(unpackBlock(entry.first));
+  result.reserve(keys_.size());
+  for (std::uint64_t key : keys_) result.push_back(unpackBlock(key));
   return result;
 }
 
@@ -115,22 +132,53 @@ void castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& point, double
   }
 }
 
-// discretize: the centre of each end voxel once, in the order of the voxel's first point, as
-// OcTree's computeDiscreteUpdate builds its discretized cloud; points outside the representable
-// range are left out (and counted).
-std::vector<Eigen::Vector3f> endVoxelCentres(const std::vector<Eigen::Vector3f>& points,
-                                             double resolution, std::size_t* skipped) {
-  std::vector<Eigen::Vector3f> centres;
-  SpatialKeySet seen;
-  for (const Eigen::Vector3f& p : points) {
-    const Eigen::Vector3d point = p.cast<double>();
+// The end voxels of points [first, last) in the order of each one's first point, their keys in
+// `seen`; points outside the representable range are left out (and counted).
+void collectEndVoxels(const std::vector<Eigen::Vector3f>& points, std::size_t first,
+                      std::size_t last, double resolution, SpatialKeySet* seen,
+                      std::vector<VoxelIndex>* voxels, std::size_t* skipped) {
+  // Room for an end voxel per four points up front, so that the set rarely grows (and rehashes)
+  // mid-cloud; a cloud in image order has runs of points in one voxel, which skip the set.
+  seen->reserve((last - first) / 4);
+  std::uint64_t last_key = ~std::uint64_t{0};  // packKey uses 63 bits
+  for (std::size_t i = first; i < last; ++i) {
+    const Eigen::Vector3d point = points[i].cast<double>();
     if (!isRepresentable(point, resolution)) {
       ++*skipped;
       continue;
     }
     const VoxelIndex voxel = voxelIndexOf(point, resolution);
-    if (!seen.insert(packKey(voxel)).second) continue;
+    const std::uint64_t key = packKey(voxel);
+    if (key == last_key) continue;
+    last_key = key;
+    if (seen->insert(key).second) voxels->push_back(voxel);
+  }
+}
+
+// discretize: the centre of each end voxel once, in the order of the voxel's first point, as
+// OcTree's computeDiscreteUpdate builds its discretized cloud. The two halves of the cloud are
+// collected on two threads; the second half's voxels that the first has too are then dropped.
+std::vector<Eigen::Vector3f> endVoxelCentres(const std::vector<Eigen::Vector3f>& points,
+                                             double resolution, std::size_t* skipped) {
+  constexpr std::size_t kParallelPoints = 8192;
+  const int parts = points.size() >= kParallelPoints && omp_get_max_threads() > 1 ? 2 : 1;
+  SpatialKeySet seen[2];
+  std::vector<VoxelIndex> voxels[2];
+  std::size_t skipped_in[2] = {0, 0};
+#pragma omp parallel for num_threads(parts) schedule(static, 1) if (parts > 1)
+  for (int part = 0; part < parts; ++part) {
+    collectEndVoxels(points, points.size() * part / parts, points.size() * (part + 1) / parts,
+                     resolution, &seen[part], &voxels[part], &skipped_in[part]);
+  }
+  *skipped += skipped_in[0] + skipped_in[1];
+  std::vector<Eigen::Vector3f> centres;
+  centres.reserve(voxels[0].size() + voxels[1].size());
+  auto add_centre = [&](const VoxelIndex& voxel) {
     centres.push_back(((voxel.cast<double>().array() + 0.5) * resolution).matrix().cast<float>());
+  };
+  for (const VoxelIndex& voxel : voxels[0]) add_centre(voxel);
+  for (const VoxelIndex& voxel : voxels[1]) {
+    if (seen[0].count(packKey(voxel)) == 0) add_centre(voxel);
   }
   return centres;
 }

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -26,20 +27,24 @@ class VoxelUpdateSet {
     std::array<std::uint64_t, kWords> occupied{};
   };
 
-  VoxelUpdateSet() = default;
-  // Copies and moves drop the block cache, which points into the source's table.
-  VoxelUpdateSet(const VoxelUpdateSet& other) : blocks_(other.blocks_) {}
-  VoxelUpdateSet(VoxelUpdateSet&& other) noexcept : blocks_(std::move(other.blocks_)) {
+  VoxelUpdateSet() { forgetRecentBlocks(); }
+  VoxelUpdateSet(const VoxelUpdateSet&) = default;
+  VoxelUpdateSet& operator=(const VoxelUpdateSet&) = default;
+  // The source is left empty (its recent blocks would name slots it no longer has).
+  VoxelUpdateSet(VoxelUpdateSet&& other) noexcept
+      : slots_(std::move(other.slots_)),
+        keys_(std::move(other.keys_)),
+        masks_(std::move(other.masks_)),
+        recent_(other.recent_),
+        last_(other.last_) {
     other.clear();
   }
-  VoxelUpdateSet& operator=(const VoxelUpdateSet& other) {
-    blocks_ = other.blocks_;
-    cached_ = nullptr;
-    return *this;
-  }
   VoxelUpdateSet& operator=(VoxelUpdateSet&& other) noexcept {
-    blocks_ = std::move(other.blocks_);
-    cached_ = nullptr;
+    slots_ = std::move(other.slots_);
+    keys_ = std::move(other.keys_);
+    masks_ = std::move(other.masks_);
+    recent_ = other.recent_;
+    last_ = other.last_;
     other.clear();
     return *this;
   }
@@ -54,7 +59,7 @@ class VoxelUpdateSet {
   bool isFree(const VoxelIndex& index) const;  // marked free and not occupied
   std::size_t occupiedCount() const;
   std::size_t freeCount() const;  // free and not occupied
-  bool empty() const { return blocks_.empty(); }
+  bool empty() const { return keys_.empty(); }
 
   std::vector<BlockIndex> blocks() const;
   // nullptr if nothing in that block is marked.
@@ -75,34 +80,44 @@ class VoxelUpdateSet {
   static BlockIndex unpackBlock(std::uint64_t key) { return unpackKey3(key); }
 
  private:
-  using Table = SpatialKeyMap<BlockMasks>;
+  // A block's masks by slot: slots stay put when blocks are added, so the recent blocks below
+  // can name them.
+  struct RecentBlock {
+    BlockIndex block;
+    std::uint32_t slot;
+  };
+  static constexpr int kRecentBlocks = 64;  // direct-mapped by the block's coordinates
+
+  void forgetRecentBlocks() {
+    // No block has these coordinates: indices are at most 2^20 voxels from the origin.
+    constexpr int kNone = std::numeric_limits<int>::min();
+    recent_.fill({BlockIndex(kNone, kNone, kNone), 0});
+    last_ = recent_[0];
+  }
+  std::uint32_t slotOf(const BlockIndex& block);
 
   void mark(const VoxelIndex& index, bool occupied) {
     // Same block and in-block index as VoxelMap::blockOf / linearIndexInBlock, inlined for the
     // hot loop (arithmetic shift floors negative indices).
     constexpr int kShift = VoxelBlock::kSideLog2;
     constexpr int kMask = VoxelBlock::kSide - 1;
-    const std::uint64_t key =
-        packBlock(BlockIndex(index.x() >> kShift, index.y() >> kShift, index.z() >> kShift));
-    // Rays walk neighbouring voxels, so most marks hit the block of the previous one. The
-    // cached pointer stays valid: the table only moves values when a new key is inserted, and
-    // that happens right here before the pointer is taken.
-    if (cached_ == nullptr || key != cached_key_) {
-      cached_ = &blocks_[key];
-      cached_key_ = key;
-    }
+    const BlockIndex block(index.x() >> kShift, index.y() >> kShift, index.z() >> kShift);
+    // Rays walk neighbouring voxels, so most marks hit the block of the previous one, and
+    // consecutive rays from one origin pass the same blocks: the table is the last resort.
+    if (block != last_.block) last_ = {block, slotOf(block)};
     const int linear =
         VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
     const std::uint64_t bit = std::uint64_t{1} << (linear & 63);
-    (occupied ? cached_->occupied : cached_->free)[linear >> 6] |= bit;
+    BlockMasks& masks = masks_[last_.slot];
+    (occupied ? masks.occupied : masks.free)[linear >> 6] |= bit;
   }
 
   template <typename Fn, typename WordFn>
   void forEachBit(Fn&& fn, WordFn&& word_of) const {
-    for (const auto& [key, masks] : blocks_) {
-      const BlockIndex block = unpackBlock(key);
+    for (std::size_t slot = 0; slot < keys_.size(); ++slot) {
+      const BlockIndex block = unpackBlock(keys_[slot]);
       for (int w = 0; w < kWords; ++w) {
-        for (std::uint64_t bits = word_of(masks, w); bits != 0; bits &= bits - 1) {
+        for (std::uint64_t bits = word_of(masks_[slot], w); bits != 0; bits &= bits - 1) {
           const int linear = 64 * w + __builtin_ctzll(bits);
           fn(VoxelIndex(block * VoxelBlock::kSide + VoxelBlock::localIndex(linear)));
         }
@@ -110,9 +125,11 @@ class VoxelUpdateSet {
     }
   }
 
-  Table blocks_;
-  BlockMasks* cached_ = nullptr;
-  std::uint64_t cached_key_ = 0;
+  SpatialKeyMap<std::uint32_t> slots_;  // block key -> slot
+  std::vector<std::uint64_t> keys_;     // per slot
+  std::vector<BlockMasks> masks_;       // per slot
+  std::array<RecentBlock, kRecentBlocks> recent_;
+  RecentBlock last_;  // the block of the last mark
 };
 
 struct PointCloudIntegratorConfig {

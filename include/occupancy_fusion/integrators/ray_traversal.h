@@ -90,6 +90,52 @@ class RayTraversal {
     t_max_[axis] += t_delta_[axis];
   }
 
+  // `steps` (<= stepsToEnd()) calls of stepTowardsEnd(), each followed by fn(current()); fn may
+  // return bool: false stops the walk. Returns the calls of fn made. The same steps, with the
+  // walk's state in locals: indexing the members by the chosen axis keeps them in memory, and
+  // each step then waits for the store of the one before.
+  template <typename VoxelFn>
+  int walkTowardsEnd(int steps, VoxelFn&& fn) {
+    double tx = t_max_[0], ty = t_max_[1], tz = t_max_[2];
+    const double dx = t_delta_[0], dy = t_delta_[1], dz = t_delta_[2];
+    const int sx = step_[0], sy = step_[1], sz = step_[2];
+    int rx = remaining_[0], ry = remaining_[1], rz = remaining_[2];
+    VoxelIndex voxel = current_;
+    double t_entry = t_entry_;
+    int calls = 0;
+    while (calls < steps) {
+      // nextAxis(): ties step x before y before z.
+      if (tx <= ty && tx <= tz) {
+        voxel.x() += sx;
+        t_entry = tx;
+        tx += dx;
+        if (--rx == 0) beyond_t_max_[0] = tx, tx = kInfinity;
+      } else if (ty <= tz) {
+        voxel.y() += sy;
+        t_entry = ty;
+        ty += dy;
+        if (--ry == 0) beyond_t_max_[1] = ty, ty = kInfinity;
+      } else {
+        voxel.z() += sz;
+        t_entry = tz;
+        tz += dz;
+        if (--rz == 0) beyond_t_max_[2] = tz, tz = kInfinity;
+      }
+      ++calls;
+      if constexpr (std::is_same_v<std::invoke_result_t<VoxelFn&, const VoxelIndex&>, bool>) {
+        if (!fn(static_cast<const VoxelIndex&>(voxel))) break;
+      } else {
+        fn(static_cast<const VoxelIndex&>(voxel));
+      }
+    }
+    t_max_[0] = tx, t_max_[1] = ty, t_max_[2] = tz;
+    remaining_[0] = rx, remaining_[1] = ry, remaining_[2] = rz;
+    current_ = voxel;
+    t_entry_ = t_entry;
+    steps_left_ -= calls;
+    return calls;
+  }
+
   // next() for the hot loop of a segment walk. Precondition: beforeEnd().
   void stepTowardsEnd() {
     const int axis = nextAxis();
@@ -144,15 +190,13 @@ int forEachVoxelOnRay(const Eigen::Vector3d& start, const Eigen::Vector3d& end, 
                       RayEnd end_mode, VoxelFn&& fn) {
   RayTraversal ray(start, end, resolution);
   const int count = ray.stepsToEnd() + (end_mode == RayEnd::kInclude ? 1 : 0);
-  for (int i = 0; i < count; ++i) {
-    if (i > 0) ray.stepTowardsEnd();
-    if constexpr (std::is_same_v<std::invoke_result_t<VoxelFn&, const VoxelIndex&>, bool>) {
-      if (!fn(ray.current())) return i + 1;
-    } else {
-      fn(ray.current());
-    }
+  if (count == 0) return 0;
+  if constexpr (std::is_same_v<std::invoke_result_t<VoxelFn&, const VoxelIndex&>, bool>) {
+    if (!fn(ray.current())) return 1;
+  } else {
+    fn(ray.current());
   }
-  return count;
+  return 1 + ray.walkTowardsEnd(count - 1, fn);
 }
 
 }  // namespace occupancy_fusion
