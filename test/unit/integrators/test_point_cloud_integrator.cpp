@@ -4,17 +4,20 @@
 #include <octomap/OcTree.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
 #include <vector>
 
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/integrators/ray_traversal.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -352,6 +355,50 @@ TEST(PointCloudIntegrator, ThreadCountDoesNotChangeTheUpdate) {
   });
   serial.forEachOccupied([&](const VoxelIndex& index) { ASSERT_TRUE(parallel.isOccupied(index)); });
   EXPECT_GT(checked, 10000u);
+}
+
+TEST(PointCloudIntegrator, DiscretizedEndVoxelsCountOnceWhicheverHalfHasThem) {
+  // 20 000 points (the end voxels are collected on two threads from 8192 on): the first half's
+  // voxels again in the second half, in another order, plus voxels of the second half alone,
+  // non-finite points in both.
+  std::mt19937 rng(8);
+  const Eigen::Vector3d origin(0.31, -0.42, 0.57);
+  const Cloud first = randomShell(&rng, origin, 0.5, 3.0, 10000);
+  Cloud cloud = first;
+  Cloud again = first;
+  std::shuffle(again.begin(), again.end(), rng);
+  again.resize(6000);
+  const Cloud own = randomShell(&rng, origin, 0.5, 3.0, 3998);
+  cloud.insert(cloud.end(), again.begin(), again.end());
+  cloud.insert(cloud.end(), own.begin(), own.end());
+  cloud[17] = cloud[15000] = Eigen::Vector3f(std::nanf(""), 0.0f, 0.0f);
+  const double resolution = 0.1;
+  std::set<std::tuple<int, int, int>> distinct;
+  for (const Eigen::Vector3f& p : cloud) {
+    if (!p.allFinite()) continue;
+    const VoxelIndex v = voxelIndexOf(p.cast<double>(), resolution);
+    distinct.insert({v.x(), v.y(), v.z()});
+  }
+  PointCloudIntegratorConfig config;
+  config.discretize = true;
+  const PointCloudIntegrator integrator(config);
+  const int threads = omp_get_max_threads();
+  VoxelUpdateSet updates[2];
+  IntegrationStats stats[2];
+  for (int run = 0; run < 2; ++run) {
+    omp_set_num_threads(run == 0 ? 1 : std::max(2, threads));
+    stats[run] = integrator.computeUpdate(cloud, origin, resolution, &updates[run]);
+  }
+  omp_set_num_threads(threads);
+  for (int run = 0; run < 2; ++run) {
+    EXPECT_EQ(stats[run].rays, distinct.size()) << "run " << run;
+    EXPECT_EQ(stats[run].skipped_points, 2u) << "run " << run;
+  }
+  EXPECT_GT(distinct.size(), 4000u);
+  EXPECT_EQ(updates[0].freeCount(), updates[1].freeCount());
+  EXPECT_EQ(updates[0].occupiedCount(), updates[1].occupiedCount());
+  updates[0].forEachOccupied(
+      [&](const VoxelIndex& index) { ASSERT_TRUE(updates[1].isOccupied(index)); });
 }
 
 TEST(VoxelUpdateSet, MarksMergesAndCounts) {
