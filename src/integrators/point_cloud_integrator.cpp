@@ -132,15 +132,12 @@ void castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& point, double
   }
 }
 
-// The end voxels of points [first, last) in the order of each one's first point, their keys in
-// `seen`; points outside the representable range are left out (and counted).
+// The end voxels of points [first, last) in the order of each one's first point, marked in
+// `seen` (bit masks per block: neighbouring end voxels share blocks, so a mark mostly costs no
+// table look-up); points outside the representable range are left out (and counted).
 void collectEndVoxels(const std::vector<Eigen::Vector3f>& points, std::size_t first,
-                      std::size_t last, double resolution, SpatialKeySet* seen,
+                      std::size_t last, double resolution, VoxelUpdateSet* seen,
                       std::vector<VoxelIndex>* voxels, std::size_t* skipped) {
-  // Room for an end voxel per four points up front, so that the set rarely grows (and rehashes)
-  // mid-cloud; a cloud in image order has runs of points in one voxel, which skip the set.
-  seen->reserve((last - first) / 4);
-  std::uint64_t last_key = ~std::uint64_t{0};  // packKey uses 63 bits
   for (std::size_t i = first; i < last; ++i) {
     const Eigen::Vector3d point = points[i].cast<double>();
     if (!isRepresentable(point, resolution)) {
@@ -148,10 +145,7 @@ void collectEndVoxels(const std::vector<Eigen::Vector3f>& points, std::size_t fi
       continue;
     }
     const VoxelIndex voxel = voxelIndexOf(point, resolution);
-    const std::uint64_t key = packKey(voxel);
-    if (key == last_key) continue;
-    last_key = key;
-    if (seen->insert(key).second) voxels->push_back(voxel);
+    if (seen->markOccupiedFirst(voxel)) voxels->push_back(voxel);
   }
 }
 
@@ -162,7 +156,7 @@ std::vector<Eigen::Vector3f> endVoxelCentres(const std::vector<Eigen::Vector3f>&
                                              double resolution, std::size_t* skipped) {
   constexpr std::size_t kParallelPoints = 8192;
   const int parts = points.size() >= kParallelPoints && omp_get_max_threads() > 1 ? 2 : 1;
-  SpatialKeySet seen[2];
+  VoxelUpdateSet seen[2];
   std::vector<VoxelIndex> voxels[2];
   std::size_t skipped_in[2] = {0, 0};
 #pragma omp parallel for num_threads(parts) schedule(static, 1) if (parts > 1)
@@ -178,7 +172,7 @@ std::vector<Eigen::Vector3f> endVoxelCentres(const std::vector<Eigen::Vector3f>&
   };
   for (const VoxelIndex& voxel : voxels[0]) add_centre(voxel);
   for (const VoxelIndex& voxel : voxels[1]) {
-    if (seen[0].count(packKey(voxel)) == 0) add_centre(voxel);
+    if (!seen[0].isOccupied(voxel)) add_centre(voxel);
   }
   return centres;
 }

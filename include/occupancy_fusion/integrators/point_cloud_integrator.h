@@ -51,6 +51,9 @@ class VoxelUpdateSet {
 
   void markFree(const VoxelIndex& index) { mark(index, false); }
   void markOccupied(const VoxelIndex& index) { mark(index, true); }
+  // markOccupied, and whether the voxel was not marked occupied before (a set of voxels that is
+  // cheap where consecutive ones share blocks).
+  bool markOccupiedFirst(const VoxelIndex& index) { return mark(index, true); }
   // Union with another set (e.g. one computed on another thread).
   void merge(const VoxelUpdateSet& other);
   void clear();
@@ -96,7 +99,8 @@ class VoxelUpdateSet {
   }
   std::uint32_t slotOf(const BlockIndex& block);
 
-  void mark(const VoxelIndex& index, bool occupied) {
+  // Returns whether the bit was clear before.
+  bool mark(const VoxelIndex& index, bool occupied) {
     // Same block and in-block index as VoxelMap::blockOf / linearIndexInBlock, inlined for the
     // hot loop (arithmetic shift floors negative indices).
     constexpr int kShift = VoxelBlock::kSideLog2;
@@ -109,7 +113,10 @@ class VoxelUpdateSet {
         VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
     const std::uint64_t bit = std::uint64_t{1} << (linear & 63);
     BlockMasks& masks = masks_[last_.slot];
-    (occupied ? masks.occupied : masks.free)[linear >> 6] |= bit;
+    std::uint64_t& word = (occupied ? masks.occupied : masks.free)[linear >> 6];
+    const bool first = (word & bit) == 0;
+    word |= bit;
+    return first;
   }
 
   template <typename Fn, typename WordFn>
