@@ -50,11 +50,21 @@ struct BucketExtremes {
     addMax(x);
     addMin(x);
   }
+  // The union's two largest and two smallest distinct values, without a branch (the coarse
+  // layers merge thousands of cells per frame, in no predictable pattern): of each side's pair
+  // (max1 > max2, or max2 = -inf) the largest value below the union's maximum m is max1 if that
+  // is below m, else max2; likewise for the minima.
   void merge(const BucketExtremes& other) {
-    addMax(other.max1);
-    addMax(other.max2);
-    addMin(other.min1);
-    addMin(other.min2);
+    const float top = std::max(max1, other.max1);
+    const float ours_below = max1 < top ? max1 : max2;
+    const float theirs_below = other.max1 < top ? other.max1 : other.max2;
+    max2 = std::max(ours_below, theirs_below);
+    max1 = top;
+    const float bottom = std::min(min1, other.min1);
+    const float ours_above = min1 > bottom ? min1 : min2;
+    const float theirs_above = other.min1 > bottom ? other.min1 : other.min2;
+    min2 = std::min(ours_above, theirs_above);
+    min1 = bottom;
   }
 };
 
