@@ -425,8 +425,8 @@ class StripExtremes {
         low = min1_[u] < low ? min1_[u] : low;
         high = max1_[u] > high ? max1_[u] : high;
       }
-      std::fill(&min1_[first], &min1_[last], low);
-      std::fill(&max1_[first], &max1_[last], high);
+      std::fill(min1_.data() + first, min1_.data() + last, low);
+      std::fill(max1_.data() + first, max1_.data() + last, high);
     }
     std::fill(min2_.begin(), min2_.end(), kInfinity);
     std::fill(max2_.begin(), max2_.end(), -kInfinity);

@@ -182,6 +182,47 @@ TEST(RayTraversal, ContinuesAlongTheRayBeyondTheEnd) {
   EXPECT_NEAR(again.length(), (e - s).norm(), 1e-12);
 }
 
+// walkTowardsEnd keeps the walk's state in locals and writes it back: the same voxels and entry
+// parameters as stepTowardsEnd, also when it stops part way (fn returns false) and for the walk
+// beyond the end with next() afterwards.
+TEST(RayTraversal, WalkingInOneCallEqualsSteppingOneByOne) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
+  int stopped_early = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const double r = i % 2 == 0 ? 0.1 : 0.25;
+    const Eigen::Vector3d s(coordinate(rng), coordinate(rng), coordinate(rng));
+    Eigen::Vector3d e(coordinate(rng), coordinate(rng), coordinate(rng));
+    if (i % 7 == 0) e[i % 3] = s[i % 3];  // no step along one axis
+    RayTraversal stepped(s, e, r), walked(s, e, r);
+    const int steps = stepped.stepsToEnd();
+    // fn returns false at the stop_after-th voxel (at least the first).
+    const int stop_after = i % 3 == 0 ? std::max(1, steps / 2) : steps;
+    std::vector<VoxelIndex> expected, seen;
+    for (int k = 0; k < std::min(stop_after, steps); ++k) {
+      stepped.stepTowardsEnd();
+      expected.push_back(stepped.current());
+    }
+    const int calls = walked.walkTowardsEnd(steps, [&](const VoxelIndex& voxel) {
+      seen.push_back(voxel);
+      return static_cast<int>(seen.size()) < stop_after;
+    });
+    stopped_early += calls < steps;
+    ASSERT_EQ(calls, std::min(stop_after, steps)) << i;
+    ASSERT_EQ(seen, expected) << i;
+    ASSERT_EQ(walked.current(), stepped.current());
+    ASSERT_EQ(walked.stepsToEnd(), stepped.stepsToEnd());
+    ASSERT_EQ(walked.entryParameter(), stepped.entryParameter());
+    for (int k = 0; k < 12; ++k) {  // on to the end and beyond it
+      stepped.next();
+      walked.next();
+      ASSERT_EQ(walked.current(), stepped.current()) << i << " step " << k;
+      ASSERT_EQ(walked.entryParameter(), stepped.entryParameter());
+    }
+  }
+  EXPECT_GT(stopped_early, 100);
+}
+
 TEST(RayTraversal, MatchesBruteForceOnRandomSegments) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
