@@ -14,8 +14,9 @@
 # Usage: scripts/robot_budget.sh [seconds measured, default 60] [output folder, default
 #        ./output/robot_budget] [name:=value ...  arguments of the generated launch file:
 #        resolution (default 0.05), publish_rate (the MapServer's, default 20 Hz), stereo_input
-#        (full, half or quarter; default full), worker_threads (the manager's; default one per
-#        core), queue_size (the mappers' input queues, default 5), stereo_method (visibility or
+#        (full, half or quarter; default full), worker_threads (the manager's; default
+#        mapping.launch's, 6), queue_size (the mappers' input queues; default their configs', 5),
+#        stereo_method (visibility or
 #        octomap), disparity (false: no DisparityMapper)]
 # BUDGET_BUILD_DIR=<catkin build folder> uses that build as it is (no install, no build step).
 set -eo pipefail
@@ -48,13 +49,11 @@ cat > "$out/robot_budget.launch" << 'EOF'
   <arg name="resolution" default="0.05"/>
   <arg name="publish_rate" default="20.0"/>
   <arg name="stereo_input" default="full"/>
-  <arg name="worker_threads" default="0"/>  <!-- 0: the manager's default (one per core) -->
-  <arg name="queue_size" default="5"/>      <!-- the mappers' input queues -->
+  <arg name="worker_threads" default="6"/>  <!-- the manager's; mapping.launch's default -->
+  <arg name="queue_size" default=""/>       <!-- the mappers' input queues; "": their configs' -->
   <arg name="stereo_method" default="visibility"/>
   <arg name="disparity" default="true"/>      <!-- false: no DisparityMapper -->
   <param name="use_sim_time" value="true"/>
-  <param if="$(eval int(arg('worker_threads')) > 0)" name="occupancy_fusion_manager/num_worker_threads"
-         value="$(arg worker_threads)"/>
   <include file="$(find occupancy_fusion)/launch/mapping.launch">
     <arg name="depth" value="true"/>
     <arg name="disparity" value="$(arg disparity)"/>
@@ -63,6 +62,7 @@ cat > "$out/robot_budget.launch" << 'EOF'
     <arg name="front_scan" value="scan_front"/>
     <arg name="rear_scan" value="scan_rear"/>
     <arg name="stereo_method" value="$(arg stereo_method)"/>
+    <arg name="worker_threads" value="$(arg worker_threads)"/>
   </include>
   <param name="map_server/publish_rate" value="$(arg publish_rate)"/>
   <param name="map_server/resolution" value="$(arg resolution)"/>
@@ -70,9 +70,11 @@ cat > "$out/robot_budget.launch" << 'EOF'
   <param name="disparity_mapper/resolution" value="$(arg resolution)"/>
   <param name="laser_mapper/resolution" value="$(arg resolution)"/>
   <param name="disparity_mapper/stereo/input_resolution" value="$(arg stereo_input)"/>
-  <param name="depth_mapper/queue_size" value="$(arg queue_size)"/>
-  <param name="disparity_mapper/queue_size" value="$(arg queue_size)"/>
-  <param name="laser_mapper/queue_size" value="$(arg queue_size)"/>
+  <group if="$(eval arg('queue_size') != '')">
+    <param name="depth_mapper/queue_size" value="$(arg queue_size)"/>
+    <param name="disparity_mapper/queue_size" value="$(arg queue_size)"/>
+    <param name="laser_mapper/queue_size" value="$(arg queue_size)"/>
+  </group>
 </launch>
 EOF
 
