@@ -16,8 +16,8 @@
 #        resolution (default 0.05), publish_rate (the MapServer's, default 20 Hz), stereo_input
 #        (full, half or quarter; default full), worker_threads (the manager's; default
 #        mapping.launch's, 6), queue_size (the mappers' input queues; default their configs', 5),
-#        stereo_method (visibility or
-#        octomap), disparity (false: no DisparityMapper)]
+#        stereo_method (visibility or octomap), disparity (false: no DisparityMapper),
+#        depth_threads and disparity_threads (the mappers' ~threads; default their configs')]
 # BUDGET_BUILD_DIR=<catkin build folder> uses that build as it is (no install, no build step).
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -53,6 +53,8 @@ cat > "$out/robot_budget.launch" << 'EOF'
   <arg name="queue_size" default=""/>       <!-- the mappers' input queues; "": their configs' -->
   <arg name="stereo_method" default="visibility"/>
   <arg name="disparity" default="true"/>      <!-- false: no DisparityMapper -->
+  <arg name="depth_threads" default=""/>       <!-- the mappers' ~threads; "": their configs' -->
+  <arg name="disparity_threads" default=""/>
   <param name="use_sim_time" value="true"/>
   <include file="$(find occupancy_fusion)/launch/mapping.launch">
     <arg name="depth" value="true"/>
@@ -70,6 +72,10 @@ cat > "$out/robot_budget.launch" << 'EOF'
   <param name="disparity_mapper/resolution" value="$(arg resolution)"/>
   <param name="laser_mapper/resolution" value="$(arg resolution)"/>
   <param name="disparity_mapper/stereo/input_resolution" value="$(arg stereo_input)"/>
+  <param if="$(eval arg('depth_threads') != '')" name="depth_mapper/threads"
+         value="$(arg depth_threads)"/>
+  <param if="$(eval arg('disparity_threads') != '')" name="disparity_mapper/threads"
+         value="$(arg disparity_threads)"/>
   <group if="$(eval arg('queue_size') != '')">
     <param name="depth_mapper/queue_size" value="$(arg queue_size)"/>
     <param name="disparity_mapper/queue_size" value="$(arg queue_size)"/>

@@ -68,4 +68,22 @@ FusedGridConfig readFusedGridConfig(const ParameterSource& source) {
   return config;
 }
 
+void MapperNodeletConfig::validate() const {
+  if (queue_size < 1) {
+    throw std::invalid_argument("queue_size must be >= 1, not " + std::to_string(queue_size));
+  }
+  if (threads < 0 || threads > kMaxThreads) {
+    throw std::invalid_argument("threads must be in [0, " + std::to_string(kMaxThreads) +
+                                "] (0: the OpenMP default), not " + std::to_string(threads));
+  }
+}
+
+MapperNodeletConfig readMapperNodeletConfig(const ParameterSource& source) {
+  MapperNodeletConfig config;
+  source.get("queue_size", &config.queue_size);
+  source.get("threads", &config.threads);
+  config.validate();
+  return config;
+}
+
 }  // namespace occupancy_fusion

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "occupancy_fusion/params/config_readers.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
 #include "occupancy_fusion/ros/shared_map_access.h"
 
@@ -15,8 +16,9 @@ void MapperNodeletBase::setUpMapper(
   try {
     map_ = acquireSharedMap(parameters, getName());
     read_mapper_config(parameters);
-    parameters.get("queue_size", &queue_size_);
-    if (queue_size_ < 1) throw std::invalid_argument("queue_size must be >= 1");
+    const MapperNodeletConfig nodelet_config = readMapperNodeletConfig(parameters);
+    queue_size_ = nodelet_config.queue_size;
+    threads_ = nodelet_config.threads;
     parameters.get("publish_map", &publish_map);
     if (publish_map) {
       map_publisher_ =

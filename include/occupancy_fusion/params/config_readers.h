@@ -29,6 +29,17 @@ VoxelMapConfig readVoxelMapConfig(const ParameterSource& source);
 // unbounded when absent).
 FusedGridConfig readFusedGridConfig(const ParameterSource& source);
 
+// What a mapper nodelet reads besides its map and integrator: queue_size (messages, >= 1: the
+// subscribers' and the tf2 filter's queues) and threads (the OpenMP threads of its integrations,
+// in [0, kMaxThreads]; 0: the integrating thread's own default).
+struct MapperNodeletConfig {
+  static constexpr int kMaxThreads = 256;  // more is a typo, not a machine
+  int queue_size = 5;
+  int threads = 0;
+  void validate() const;  // throws std::invalid_argument naming the bad parameter
+};
+MapperNodeletConfig readMapperNodeletConfig(const ParameterSource& source);
+
 // Readers of integrator configs are defined inline: the map library, which holds the readers
 // above, must not depend on the integrators library (it links the other way round).
 

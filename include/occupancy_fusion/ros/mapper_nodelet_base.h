@@ -1,7 +1,7 @@
 // What the mapper nodelets (point cloud, depth, disparity, laser) share, so that each keeps only
 // its input, its conversion and its frame: the shared map and the parameters every mapper reads
-// (the map's, ~queue_size, ~publish_map), the mapping session over the shared map that applies
-// the rules offline_mapper applies too (mapping/mapping_session.h: duplicate stamps, poses,
+// (the map's, ~queue_size, ~threads, ~publish_map), the mapping session over the shared map that
+// applies the rules offline_mapper applies too (mapping/mapping_session.h: duplicate stamps, poses,
 // laser sources, drops), the MapPublisher of a mapper that runs alone, the tf2 buffer with the
 // message filters that hold inputs back until their pose is known, and the 1 Hz diagnostics task
 // with the input statistics every mapper reports alike (FrameStatistics: frames received and
@@ -28,9 +28,10 @@
 #include <tf2_ros/transform_listener.h>
 #include <Eigen/Geometry>
 
-#include "occupancy_fusion/mapping/mapping_session.h"
-#include "occupancy_fusion/params/parameter_source.h"
 #include "occupancy_fusion/mapping/frame_statistics.h"
+#include "occupancy_fusion/mapping/mapping_session.h"
+#include "occupancy_fusion/mapping/scoped_openmp_threads.h"
+#include "occupancy_fusion/params/parameter_source.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/map_registry.h"
 
@@ -41,8 +42,8 @@ class MapperNodeletBase : public nodelet::Nodelet {
   using DiagnosticsTask = std::function<void(diagnostic_updater::DiagnosticStatusWrapper&)>;
 
   // Acquires the shared map, lets `read_mapper_config` read the mapper's own configuration, then
-  // reads ~queue_size and ~publish_map (creating the MapPublisher when set) and starts the tf2
-  // listener. A std::invalid_argument from any of them is logged as fatal and rethrown.
+  // reads ~queue_size, ~threads and ~publish_map (creating the MapPublisher when set) and starts
+  // the tf2 listener. A std::invalid_argument from any of them is logged as fatal and rethrown.
   void setUpMapper(const std::function<void(const ParameterSource&)>& read_mapper_config);
 
   // Publishes the input statistics and `fill`'s status as diagnostics task `task_name` once a
@@ -63,6 +64,9 @@ class MapperNodeletBase : public nodelet::Nodelet {
     FrameOutcome outcome;
     {
       const std::lock_guard<std::mutex> lock(session_mutex_);
+      // ~threads: the manager's worker threads run every nodelet's callbacks, so this mapper's
+      // OpenMP thread count is set for each frame on the thread that integrates it.
+      const ScopedOpenMpThreads threads(threads_);
       outcome = session_->integrate(frame);
     }
     if (outcome.integrated) {
@@ -168,6 +172,7 @@ class MapperNodeletBase : public nodelet::Nodelet {
 
   std::shared_ptr<SharedMap> map_;
   int queue_size_ = 5;
+  int threads_ = 0;
   std::unique_ptr<MapPublisher> map_publisher_;
   // Outlives the derived mappers' message filters, which unregister from it when they go.
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;

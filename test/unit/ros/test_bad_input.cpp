@@ -444,6 +444,42 @@ TEST(BadParameters, AreRejectedNamingTheParameter) {
   EXPECT_NO_THROW(readVoxelMapConfig(DoubleParameters({{"resolution", 0.1}})));
 }
 
+// A mapper nodelet's own settings: queue_size and threads.
+TEST(BadParameters, MapperQueueAndThreadsAreRejectedNamingTheParameter) {
+  class IntParameters : public DoubleParameters {
+   public:
+    explicit IntParameters(std::map<std::string, int> values)
+        : DoubleParameters({}), values_(std::move(values)) {}
+    using DoubleParameters::get;
+    bool get(const std::string& key, int* value) const override {
+      const auto found = values_.find(key);
+      if (found == values_.end()) return false;
+      *value = found->second;
+      return true;
+    }
+
+   private:
+    std::map<std::string, int> values_;
+  };
+  const std::vector<std::pair<std::map<std::string, int>, std::string>> cases = {
+      {{{"queue_size", 0}}, "queue_size"},
+      {{{"threads", -1}}, "threads"},
+      {{{"threads", 257}}, "threads"},
+  };
+  for (const auto& [values, name] : cases) {
+    const std::string why =
+        messageOf<std::invalid_argument>([&] { readMapperNodeletConfig(IntParameters(values)); });
+    EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
+  }
+  const MapperNodeletConfig defaults = readMapperNodeletConfig(IntParameters({}));
+  EXPECT_EQ(defaults.queue_size, 5);
+  EXPECT_EQ(defaults.threads, 0);
+  const MapperNodeletConfig read =
+      readMapperNodeletConfig(IntParameters({{"queue_size", 1}, {"threads", 256}}));
+  EXPECT_EQ(read.queue_size, 1);
+  EXPECT_EQ(read.threads, 256);
+}
+
 // The spill store's parameters reach the map's config, in bytes.
 TEST(MapParameters, SpillFolderAndLimitReachTheMap) {
   class SpillParameters : public DoubleParameters {
