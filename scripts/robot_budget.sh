@@ -17,7 +17,8 @@
 #        (full, half or quarter; default full), worker_threads (the manager's; default
 #        mapping.launch's, 6), queue_size (the mappers' input queues; default their configs', 5),
 #        stereo_method (visibility or octomap), disparity (false: no DisparityMapper),
-#        depth_threads and disparity_threads (the mappers' ~threads; default their configs')]
+#        depth_threads and disparity_threads (the mappers' ~threads; default their configs'),
+#        disparity_queue_size (the DisparityMapper's queue alone)]
 # BUDGET_BUILD_DIR=<catkin build folder> uses that build as it is (no install, no build step).
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -55,6 +56,7 @@ cat > "$out/robot_budget.launch" << 'EOF'
   <arg name="disparity" default="true"/>      <!-- false: no DisparityMapper -->
   <arg name="depth_threads" default=""/>       <!-- the mappers' ~threads; "": their configs' -->
   <arg name="disparity_threads" default=""/>
+  <arg name="disparity_queue_size" default=""/>  <!-- the DisparityMapper's alone, after queue_size -->
   <param name="use_sim_time" value="true"/>
   <include file="$(find occupancy_fusion)/launch/mapping.launch">
     <arg name="depth" value="true"/>
@@ -78,9 +80,12 @@ cat > "$out/robot_budget.launch" << 'EOF'
          value="$(arg disparity_threads)"/>
   <group if="$(eval arg('queue_size') != '')">
     <param name="depth_mapper/queue_size" value="$(arg queue_size)"/>
-    <param name="disparity_mapper/queue_size" value="$(arg queue_size)"/>
+    <param unless="$(eval arg('disparity_queue_size') != '')" name="disparity_mapper/queue_size"
+           value="$(arg queue_size)"/>
     <param name="laser_mapper/queue_size" value="$(arg queue_size)"/>
   </group>
+  <param if="$(eval arg('disparity_queue_size') != '')" name="disparity_mapper/queue_size"
+         value="$(arg disparity_queue_size)"/>
 </launch>
 EOF
 

@@ -105,7 +105,12 @@ void writeTf(rosbag::Bag* bag, const std::string& topic, const ros::Time& stamp,
              const std::vector<geometry_msgs::TransformStamped>& transforms) {
   tf2_msgs::TFMessage message;
   message.transforms = transforms;
-  bag->write(topic, stamp, message);
+  if (topic == "/tf_static") {
+    bag->write(topic, stamp, message,
+               latchedConnectionHeader<tf2_msgs::TFMessage>("/make_demo_recording"));
+  } else {
+    bag->write(topic, stamp, message);
+  }
 }
 
 // The scans, restamped at `rate_hz`, the first half a period after the static transforms.

@@ -9,12 +9,15 @@
 #include <vector>
 
 #include <geometry_msgs/TransformStamped.h>
+#include <ros/message_traits.h>
 #include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <stereo_msgs/DisparityImage.h>
+#include <boost/make_shared.hpp>
+#include <boost/shared_ptr.hpp>
 
 #include "occupancy_fusion/sensors/depth_image.h"
 #include "occupancy_fusion/sensors/disparity_image.h"
@@ -45,5 +48,20 @@ stereo_msgs::DisparityImage disparityMessage(const std::vector<float>& disparity
                                              int height, const StereoCamera& camera,
                                              double min_disparity, double max_disparity,
                                              const std::string& frame_id, const ros::Time& stamp);
+
+// The connection header of a latched topic as `rosbag record` keeps it (/tf_static from a
+// static_transform_publisher), for rosbag::Bag::write: `rosbag play` latches a topic only when its
+// connection says so, and a node started after the playback began would otherwise never get the
+// static transforms (the sensors' mounts) and drop every frame.
+template <class Message>
+boost::shared_ptr<ros::M_string> latchedConnectionHeader(const std::string& caller_id) {
+  auto header = boost::make_shared<ros::M_string>();
+  (*header)["type"] = ros::message_traits::datatype<Message>();
+  (*header)["md5sum"] = ros::message_traits::md5sum<Message>();
+  (*header)["message_definition"] = ros::message_traits::definition<Message>();
+  (*header)["callerid"] = caller_id;
+  (*header)["latching"] = "1";
+  return header;
+}
 
 }  // namespace occupancy_fusion

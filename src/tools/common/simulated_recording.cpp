@@ -338,7 +338,8 @@ int writeSimulatedRecording(const SimulatedRecordingConfig& config,
       mounts.transforms.push_back(transform);
     }
   }
-  bag.write("/tf_static", stampOf(config, 0), mounts);
+  bag.write("/tf_static", stampOf(config, 0), mounts,
+            latchedConnectionHeader<tf2_msgs::TFMessage>("/simulate_recording"));
 
   for (int frame = 0; frame < config.frames; ++frame) {
     const ros::Time stamp = stampOf(config, frame);

@@ -219,6 +219,13 @@ TEST(SimulatedRecording, WritesEachSensorAtItsOwnRateAndSize) {
       EXPECT_NEAR(stamps[topic][i] - stamps[topic][i - 1], every / 120.0, 1e-6) << topic;
     }
   }
+  // The mounts on /tf_static are latched on playback, as rosbag record keeps a
+  // static_transform_publisher's: a mapper started after the bag began still gets them.
+  for (const rosbag::ConnectionInfo* connection : rosbag::View(bag).getConnections()) {
+    const ros::M_string& header = *connection->header;
+    const bool latched = header.count("latching") > 0 && header.at("latching") == "1";
+    EXPECT_EQ(latched, connection->topic == "/tf_static") << connection->topic;
+  }
   options.every = {{"cloud", 2}};  // not recorded
   EXPECT_THROW(makeSimulatedSensors({"depth"}, options), std::invalid_argument);
   options.every = {{"depth", 0}};

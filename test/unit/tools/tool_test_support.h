@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -19,6 +20,8 @@
 
 #include <octomap/OcTree.h>
 #include <ros/time.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
 
 #include "occupancy_fusion/tools/simulated_recording.h"
 
@@ -26,6 +29,19 @@ namespace occupancy_fusion {
 namespace test_support {
 
 namespace fs = std::filesystem;
+
+// Per topic of a bag, its connection header's "latching" ("" where absent): what rosbag play
+// reads to latch a topic.
+inline std::map<std::string, std::string> latchingByTopic(const fs::path& bag_path) {
+  rosbag::Bag bag(bag_path.string(), rosbag::bagmode::Read);
+  rosbag::View view(bag);
+  std::map<std::string, std::string> latching;
+  for (const rosbag::ConnectionInfo* connection : view.getConnections()) {
+    const auto found = connection->header->find("latching");
+    latching[connection->topic] = found == connection->header->end() ? "" : found->second;
+  }
+  return latching;
+}
 
 struct RunResult {
   int exit_code = -1;
