@@ -19,7 +19,8 @@ namespace {
 const char* const kUsage = R"(usage: simulate_recording --output OUT.bag [options]
 
 Writes a deterministic rosbag of a robot moving through a simulated scene with its sensors, the
-robot's pose on /tf (map -> odom -> base_link) and the sensor mounts on /tf_static. Sensors:
+robot's pose on /tf (map -> odom -> base_link) and the sensor mounts on /tf_static (latched on
+playback, as a recorded static_transform_publisher). Sensors:
   cloud      sensor_msgs/PointCloud2 on /cloud_in (frame camera_optical_frame)
   depth      sensor_msgs/Image 16UC1 (mm) on /camera/depth/image with /camera/depth/camera_info
              (frame depth_camera_optical_frame)
