@@ -101,16 +101,10 @@ Options parseOptions(const CommandLine& line) {
 
 ros::Time stampAt(double seconds_from_start) { return ros::Time(kStartTime + seconds_from_start); }
 
-void writeTf(rosbag::Bag* bag, const std::string& topic, const ros::Time& stamp,
-             const std::vector<geometry_msgs::TransformStamped>& transforms) {
+tf2_msgs::TFMessage tfMessage(const std::vector<geometry_msgs::TransformStamped>& transforms) {
   tf2_msgs::TFMessage message;
   message.transforms = transforms;
-  if (topic == "/tf_static") {
-    bag->write(topic, stamp, message,
-               latchedConnectionHeader<tf2_msgs::TFMessage>("/make_demo_recording"));
-  } else {
-    bag->write(topic, stamp, message);
-  }
+  return message;
 }
 
 // The scans, restamped at `rate_hz`, the first half a period after the static transforms.
@@ -120,9 +114,9 @@ void writeLaser(const std::vector<CarmenLaserScan>& scans, double rate_hz, rosba
     const ros::Time stamp = stampAt((k + 0.5) / rate_hz);
     const Eigen::Isometry3d T_odom_base = Eigen::Translation3d(carmen.x, carmen.y, 0.0) *
                                           Eigen::AngleAxisd(carmen.theta, Eigen::Vector3d::UnitZ());
-    writeTf(bag, "/tf", stamp,
-            {transformMessage(Eigen::Isometry3d::Identity(), "map", "odom", stamp),
-             transformMessage(T_odom_base, "odom", "base_link", stamp)});
+    bag->write("/tf", stamp,
+               tfMessage({transformMessage(Eigen::Isometry3d::Identity(), "map", "odom", stamp),
+                          transformMessage(T_odom_base, "odom", "base_link", stamp)}));
     sensor_msgs::LaserScan message;
     message.header.frame_id = "laser";
     message.header.stamp = stamp;
@@ -203,7 +197,8 @@ std::vector<geometry_msgs::TransformStamped> writeDepth(int frames, double durat
   for (int k = 0; k < frames; ++k) {
     const ros::Time stamp = stampAt(duration * (k + 0.25) / frames);
     const Eigen::Isometry3d T_map_base = T_map_room * room.T_map_base[k];
-    writeTf(bag, "/tf", stamp, {transformMessage(T_map_base, "map", "sim_base_link", stamp)});
+    bag->write("/tf", stamp,
+               tfMessage({transformMessage(T_map_base, "map", "sim_base_link", stamp)}));
     // Rendered in the room's own frame, where the scene is.
     const sim::DepthImage depth = sim::renderDepth(
         room.scene, camera.camera, room.T_map_base[k] * T_base_optical, camera.max_range);
@@ -244,7 +239,8 @@ int run(int argc, char** argv) {
   const double duration = scans.size() / options.rate_hz;
   for (const auto& t : writeStereo(options, duration, &bag)) statics.push_back(t);
   for (const auto& t : writeDepth(options.depth_frames, duration, &bag)) statics.push_back(t);
-  writeTf(&bag, "/tf_static", stampAt(0), statics);
+  bag.write("/tf_static", stampAt(0), tfMessage(statics),
+            latchedConnectionHeader<tf2_msgs::TFMessage>("/make_demo_recording"));
   writeLaser(scans, options.rate_hz, &bag);
   bag.close();
   std::cout << "make_demo_recording: wrote " << scans.size() << " scans, "

@@ -23,6 +23,7 @@
 #include "occupancy_fusion/tools/simulated_recording.h"
 
 #include "../../common/test_folder.h"
+#include "tool_test_support.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -221,10 +222,8 @@ TEST(SimulatedRecording, WritesEachSensorAtItsOwnRateAndSize) {
   }
   // The mounts on /tf_static are latched on playback, as rosbag record keeps a
   // static_transform_publisher's: a mapper started after the bag began still gets them.
-  for (const rosbag::ConnectionInfo* connection : rosbag::View(bag).getConnections()) {
-    const ros::M_string& header = *connection->header;
-    const bool latched = header.count("latching") > 0 && header.at("latching") == "1";
-    EXPECT_EQ(latched, connection->topic == "/tf_static") << connection->topic;
+  for (const auto& [topic, latching] : test_support::latchingByTopic(path)) {
+    EXPECT_EQ(latching, topic == "/tf_static" ? "1" : "") << topic;
   }
   options.every = {{"cloud", 2}};  // not recorded
   EXPECT_THROW(makeSimulatedSensors({"depth"}, options), std::invalid_argument);
