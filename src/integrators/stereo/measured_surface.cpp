@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "float_quads.h"
 #include "occupancy_fusion/integrators/stereo/median_network.h"
 
 namespace occupancy_fusion {
@@ -101,6 +102,60 @@ LocalPairs localPairs(const DisparityImageView& image, int u, int v, int reach, 
   }
   if (pairs.inliers > 0) pairs.mean = static_cast<float>(sum / pairs.inliers);
   return pairs;
+}
+
+// localPairs of the nodes (u + l * step, v) of kLanes lanes at once, each against its own
+// reference, four lanes to a vector; every node's window must lie inside the image. Each lane adds
+// the same terms in the same order as localPairs, so the means are the same bits.
+void localPairsOfLanes(const DisparityImageView& image, int u, int step, int v, int reach,
+                       const float* references, float limit, LocalPairs* pairs) {
+  using IntQuad = int __attribute__((vector_size(4 * sizeof(int))));
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const std::ptrdiff_t stride = image.row_stride > 0 ? image.row_stride : image.width;
+  const FloatQuad no_term = {};
+  for (int q = 0; q < MedianNetwork::kLanes / 4; ++q) {
+    const float* centre = image.disparity + v * stride + u + 4 * q * step;
+    const FloatQuad reference = loadQuad(references + 4 * q);
+    auto gather = [&](std::ptrdiff_t offset) {
+      const float* p = centre + offset;
+      return FloatQuad{p[0], p[step], p[2 * step], p[3 * step]};
+    };
+    auto valid = [](const FloatQuad& d) { return (d > 0) & (d < kInf); };  // NaN, inf fail
+    // |d - reference| <= limit, as the difference and its negation (the same bits negated).
+    auto near = [&](const FloatQuad& d) {
+      return (d - reference <= limit) & (reference - d <= limit);
+    };
+    IntQuad valid_count = {}, inlier_count = {};
+    DoublePair low_sum = {}, high_sum = {};  // lanes 0-1 and 2-3
+    // A term left out adds 0.0 (as in localPairs; the sums start at +0).
+    auto add = [&](const FloatQuad& term, double factor) {
+      low_sum += factor * DoublePair{term[0], term[1]};
+      high_sum += factor * DoublePair{term[2], term[3]};
+    };
+    for (int dv = -reach; dv <= 0; ++dv) {
+      const int last = dv == 0 ? -1 : reach;
+      for (int du = -reach; du <= last; ++du) {
+        const FloatQuad first = gather(dv * stride + du), second = gather(-dv * stride - du);
+        const IntQuad both = valid(first) & valid(second);
+        const IntQuad inlier = both & near(first) & near(second);
+        add(inlier ? first + second : no_term, 0.5);  // the float sum halved in double
+        valid_count -= both;                          // masks are -1
+        inlier_count -= inlier;
+      }
+    }
+    const FloatQuad middle = gather(0);
+    const IntQuad middle_valid = valid(middle), middle_inlier = middle_valid & near(middle);
+    add(middle_inlier ? middle : no_term, 1.0);
+    valid_count -= middle_valid;
+    inlier_count -= middle_inlier;
+    const double sums[4] = {low_sum[0], low_sum[1], high_sum[0], high_sum[1]};
+    for (int l = 0; l < 4; ++l) {
+      LocalPairs& lane = pairs[4 * q + l];
+      lane.valid = valid_count[l];
+      lane.inliers = inlier_count[l];
+      lane.mean = lane.inliers > 0 ? static_cast<float>(sums[l] / lane.inliers) : 0.0f;
+    }
+  }
 }
 
 }  // namespace
@@ -249,7 +304,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
     std::vector<MedianNetwork::Lanes> rows(per_side * per_side);
     int counts[kLanes], sample_counts[kLanes];
     float robust[kLanes], one_side[kLanes];
-    LocalPairs local[kLanes];
+    LocalPairs local[kLanes], side[kLanes];
     const int v = j * step_;
     for (int first = 0; first < columns_; first += kLanes) {
       const int lanes_used = std::min(kLanes, columns_ - first);
@@ -271,25 +326,38 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
       //    median is a surface in the gap that no pixel sees. There the median of the wide
       //    window's samples themselves (every other one), which lies on one side, takes its
       //    place.
+      const int u = first * step_;
+      const bool inside = lanes_used == kLanes && u >= local_reach &&
+                          u + (kLanes - 1) * step_ + local_reach < width_ && v >= local_reach &&
+                          v + local_reach < height_;
+      auto localPairsOfRow = [&](const float* references, LocalPairs* pairs) {
+        if (inside) {
+          localPairsOfLanes(disparity, u, step_, v, local_reach, references, limit, pairs);
+          return;
+        }
+        for (int l = 0; l < lanes_used; ++l) {
+          pairs[l] = localPairs(disparity, u + l * step_, v, local_reach, references[l], limit);
+        }
+      };
+      localPairsOfRow(robust, local);
       bool straddles = false;
       for (int l = 0; l < lanes_used; ++l) {
-        local[l] = localPairs(disparity, (first + l) * step_, v, local_reach, robust[l], limit);
         straddles |= counts[l] >= needed && local[l].inliers < kMinLocalPairs &&
                      local[l].valid >= kMinLocalPairs;
       }
       if (straddles) {
         lattice.samples(first * stride, j * stride, stride, reach, rows.data());
         sample_network.medians(rows.data(), sample_counts, one_side);
+        localPairsOfRow(one_side, side);
       }
       for (int l = 0; l < lanes_used; ++l) {
         if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
         float surface = robust[l];
         if (local[l].inliers >= kMinLocalPairs) {
           surface = local[l].mean;
-        } else if (local[l].valid >= kMinLocalPairs) {
-          const LocalPairs side =
-              localPairs(disparity, (first + l) * step_, v, local_reach, one_side[l], limit);
-          surface = side.inliers >= kMinLocalPairs ? side.mean : one_side[l];
+        } else if (local[l].valid >= kMinLocalPairs && sample_counts[l] > 0) {
+          // (Without a valid sample the samples' median is +inf: the wide median stands.)
+          surface = side[l].inliers >= kMinLocalPairs ? side[l].mean : one_side[l];
         }
         cells_[linear(first + l, j)] = surface;
       }
@@ -350,13 +418,23 @@ bool MeasuredSurface::isStep(int i, int j, int di, int dj, double step_px) const
 void MeasuredSurface::findSteps(double step_px) {
   steps_.assign(cells_.size(), 0);
   if (!(step_px > 0)) return;
+  // Each grid edge once (a cell has four, and each borders two cells): from node (i, j) along its
+  // row and along its column.
+  std::vector<std::uint8_t> along_row(cells_.size(), 0), along_column(cells_.size(), 0);
+  forEachRow(rows_, [&](int j) {
+    for (int i = 0; i < columns_; ++i) {
+      if (std::isnan(cellAt(i, j))) continue;  // no step at an edge without both ends
+      if (i + 1 < columns_) along_row[linear(i, j)] = isStep(i, j, 1, 0, step_px);
+      if (j + 1 < rows_) along_column[linear(i, j)] = isStep(i, j, 0, 1, step_px);
+    }
+  });
   forEachRow(rows_ - 1, [&](int j) {
     for (int i = 0; i < columns_ - 1; ++i) {
       const bool corners = !std::isnan(cellAt(i, j)) && !std::isnan(cellAt(i + 1, j)) &&
                            !std::isnan(cellAt(i, j + 1)) && !std::isnan(cellAt(i + 1, j + 1));
       steps_[linear(i, j)] =
-          corners && (isStep(i, j, 1, 0, step_px) || isStep(i, j + 1, 1, 0, step_px) ||
-                      isStep(i, j, 0, 1, step_px) || isStep(i + 1, j, 0, 1, step_px));
+          corners && (along_row[linear(i, j)] | along_row[linear(i, j + 1)] |
+                      along_column[linear(i, j)] | along_column[linear(i + 1, j)]);
     }
   });
 }

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "float_quads.h"
+
 namespace occupancy_fusion {
 
 namespace {
@@ -55,44 +57,57 @@ MedianNetwork::MedianNetwork(int slots) : slots_(slots), middle_(slots / 2) {
   exchanges_ = prunedTo(oddEvenMergeSort(slots), slots, middle_);
 }
 
+namespace {
+
+constexpr int kQuads = MedianNetwork::kLanes / 4;
+static_assert(MedianNetwork::kLanes % 4 == 0, "lanes come in quads");
+
+FloatQuad load(const MedianNetwork::Lanes& lanes, int quad) {
+  return loadQuad(lanes.data() + 4 * quad);
+}
+
+void store(const FloatQuad& value, int quad, MedianNetwork::Lanes* lanes) {
+  storeQuad(value, lanes->data() + 4 * quad);
+}
+
+}  // namespace
+
 void MedianNetwork::medians(Lanes* values, int* counts, float* medians) const {
   // A set of n values whose missing ones become middle - n / 2 times -inf and the rest +inf has
   // its upper median on the middle wire: -inf ... v_0 .. v_n-1 ... +inf, v_(n/2) at middle.
-  // Lane by lane in step, so that the compiler keeps the lanes in one register.
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  // Counts as floats: a float selection by an integer comparison does not vectorise.
-  float valid[kLanes] = {}, below[kLanes], missing[kLanes] = {};
-  for (int r = 0; r < slots_; ++r) {
-    const Lanes row = values[r];
-    for (int l = 0; l < kLanes; ++l) valid[l] += row[l] == row[l] ? 1.0f : 0.0f;  // not NaN
-  }
-  for (int l = 0; l < kLanes; ++l) below[l] = middle_ - std::floor(0.5f * valid[l]);
-  for (int r = 0; r < slots_; ++r) {
-    const Lanes row = values[r];
-    Lanes filled;
-    for (int l = 0; l < kLanes; ++l) {
-      const float absent = row[l] == row[l] ? 0.0f : 1.0f;  // NaN
-      filled[l] = absent > 0 ? (missing[l] < below[l] ? -kInf : kInf) : row[l];
-      missing[l] += absent;
+  const FloatQuad zero = {}, one = zero + 1.0f, plus_inf = zero + kInf, minus_inf = zero - kInf;
+  for (int q = 0; q < kQuads; ++q) {
+    // Counts as floats, so that they select floats lane by lane.
+    FloatQuad valid = zero, missing = zero, below;
+    for (int r = 0; r < slots_; ++r) {
+      const FloatQuad row = load(values[r], q);
+      valid += row == row ? one : zero;  // not NaN
     }
-    values[r] = filled;
-  }
-  for (const auto& [low, high] : exchanges_) {
-    // Through copies: the compiler cannot know that the two rows differ, and vectorises only
-    // what cannot alias.
-    const Lanes a = values[low], b = values[high];
-    Lanes lower, upper;
-    for (int l = 0; l < kLanes; ++l) {
-      lower[l] = std::min(a[l], b[l]);
-      upper[l] = std::max(a[l], b[l]);
+    for (int l = 0; l < 4; ++l) below[l] = middle_ - std::floor(0.5f * valid[l]);
+    for (int r = 0; r < slots_; ++r) {
+      const FloatQuad row = load(values[r], q);
+      const auto absent = row != row;  // NaN
+      store(absent ? (missing < below ? minus_inf : plus_inf) : row, q, &values[r]);
+      missing += absent ? one : zero;
     }
-    values[low] = lower;
-    values[high] = upper;
+    for (int l = 0; l < 4; ++l) counts[4 * q + l] = static_cast<int>(valid[l]);
   }
-  for (int l = 0; l < kLanes; ++l) {
-    counts[l] = static_cast<int>(valid[l]);
-    medians[l] = values[middle_][l];
+  for (const std::pair<int, int>& exchange : exchanges_) {
+    // The wires copied: the stores (as bytes) could otherwise change them.
+    const int low = exchange.first, high = exchange.second;
+    FloatQuad a[kQuads], b[kQuads];
+    for (int q = 0; q < kQuads; ++q) {
+      a[q] = load(values[low], q);
+      b[q] = load(values[high], q);
+    }
+    for (int q = 0; q < kQuads; ++q) {
+      // std::min and std::max lane by lane (the first argument where both are equal).
+      store(b[q] < a[q] ? b[q] : a[q], q, &values[low]);
+      store(a[q] < b[q] ? b[q] : a[q], q, &values[high]);
+    }
   }
+  for (int l = 0; l < kLanes; ++l) medians[l] = values[middle_][l];
 }
 
 }  // namespace occupancy_fusion

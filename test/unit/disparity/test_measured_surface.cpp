@@ -2,8 +2,10 @@
 // against patches of wrong disparity, against a plane's analytic disparity.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -278,6 +280,119 @@ TEST(MeasuredSurface, ReadsAPlaneAlikeOnACoarseGrid) {
       EXPECT_NEAR(surfaceDepth(coarse, u, v), plane.depth(u, v), 1e-4 * plane.depth(u, v))
           << "pixel " << u << ", " << v;
     }
+  }
+}
+
+// A grid node's surface by the definition in measured_surface.h, one node at a time with
+// std::nth_element: the upper median of the wide window's symmetric sample pairs, then the small
+// window's inlier mean, or beside a step the median of the window's own samples.
+float nodeByDefinition(const std::vector<float>& image, int width, int height, int u, int v,
+                       const MeasuredSurfaceConfig& config) {
+  const float kNaN = std::numeric_limits<float>::quiet_NaN();
+  auto at = [&](int x, int y) {
+    if (x < 0 || y < 0 || x >= width || y >= height) return kNaN;
+    const float d = image[static_cast<std::size_t>(y) * width + x];
+    return std::isfinite(d) && d > 0 ? d : kNaN;
+  };
+  auto upperMedian = [](std::vector<float> values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  const int sample = config.sample_step_px, reach = config.window_px / 2 / sample;
+  std::vector<float> pair_means, samples;
+  for (int dj = -reach; dj <= reach; ++dj) {
+    for (int di = -reach; di <= reach; ++di) {
+      const float first = at(u + di * sample, v + dj * sample);
+      const bool earlier_half = dj < 0 || (dj == 0 && di < 0);
+      if (earlier_half) {
+        const float second = at(u - di * sample, v - dj * sample);
+        if (!std::isnan(first) && !std::isnan(second))
+          pair_means.push_back(0.5f * (first + second));
+      }
+      if ((di + dj) % 2 == 0 && !std::isnan(first)) samples.push_back(first);
+    }
+  }
+  if (!std::isnan(at(u, v))) pair_means.push_back(at(u, v));
+  const int per_side = 2 * reach + 1;
+  const double needed = std::ceil(config.min_valid * (per_side * per_side + 1) / 2);
+  if (pair_means.empty() || pair_means.size() < needed) return kNaN;
+  const float robust = upperMedian(pair_means);
+  // The small window's pixel pairs (both in the image and valid), and those near `reference`.
+  const int local = config.local_window_px / 2;
+  auto localMean = [&](float reference, int* valid, int* inliers) {
+    double sum = 0;
+    *valid = *inliers = 0;
+    for (int dv = -local; dv <= local; ++dv) {
+      for (int du = -local; du <= local; ++du) {
+        if (dv > 0 || (dv == 0 && du > 0)) continue;
+        const float first = at(u + du, v + dv);
+        const float second = (du == 0 && dv == 0) ? first : at(u - du, v - dv);
+        if (std::isnan(first) || std::isnan(second)) continue;
+        ++*valid;
+        if (std::abs(first - reference) > config.inlier_px ||
+            std::abs(second - reference) > config.inlier_px) {
+          continue;
+        }
+        ++*inliers;
+        sum += (du == 0 && dv == 0) ? first : 0.5 * (first + second);
+      }
+    }
+    return *inliers > 0 ? static_cast<float>(sum / *inliers) : kNaN;
+  };
+  int valid = 0, inliers = 0;
+  const float mean = localMean(robust, &valid, &inliers);
+  if (inliers >= 4) return mean;
+  if (valid < 4 || samples.empty()) return robust;
+  const float one_side = upperMedian(samples);
+  const float side_mean = localMean(one_side, &valid, &inliers);
+  return inliers >= 4 ? side_mean : one_side;
+}
+
+TEST(MeasuredSurface, NodesOfANoisyImageWithHolesAndPatchesFollowTheDefinition) {
+  // A slanted plane with a nearer box on it (steps), pixel noise, holes and patches of wrong
+  // disparity; an odd size, so that rows of nodes end in part groups and next to the borders.
+  constexpr int kOddWidth = 203, kOddHeight = 77;
+  const StereoCamera camera{125.0, 125.0, 101.0, 38.0, 0.12};
+  std::mt19937 random(11);
+  std::normal_distribution<float> noise(0.0f, 0.3f);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<float> image(static_cast<std::size_t>(kOddWidth) * kOddHeight);
+  for (int v = 0; v < kOddHeight; ++v) {
+    for (int u = 0; u < kOddWidth; ++u) {
+      const bool box = u > 60 && u < 110 && v > 20 && v < 50;
+      float d = 4.0f + 0.02f * u - 0.01f * v + (box ? 3.0f : 0.0f) + noise(random);
+      if ((u / 16 + v / 16) % 5 == 0) d += 1.5f;         // patches
+      if (unit(random) < 0.1f || (u > 150 && v > 40)) {  // holes
+        d = unit(random) < 0.5f ? std::numeric_limits<float>::quiet_NaN() : 0.0f;
+      }
+      image[static_cast<std::size_t>(v) * kOddWidth + u] = d;
+    }
+  }
+  const DisparityImageView view{kOddWidth, kOddHeight, image.data(), 0};
+  for (int grid : {4, 8}) {
+    MeasuredSurfaceConfig config;
+    config.grid_step_px = grid;
+    const MeasuredSurface surface(view, camera, Eigen::Isometry3d::Identity(), config);
+    ASSERT_EQ(surface.gridStep(), grid);
+    int nodes = 0, compared = 0;
+    for (int v = 0; v < kOddHeight; v += grid) {
+      for (int u = 0; u < kOddWidth; u += grid) {
+        const float expected = nodeByDefinition(image, kOddWidth, kOddHeight, u, v, config);
+        if (!std::isfinite(expected)) continue;
+        ++nodes;
+        // At a node's own pixel the grid reads the node (where at most one corner of its cell
+        // lacks a surface).
+        const Eigen::Vector3d point((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+        double z = 0, z_surface = 0;
+        if (!surface.depthAt(point, &z, &z_surface)) continue;
+        ++compared;
+        const double read = camera.fx * camera.baseline / z_surface;
+        EXPECT_NEAR(read, expected, 1e-4 * expected)
+            << "node at " << u << ", " << v << ", grid " << grid;
+      }
+    }
+    EXPECT_GT(nodes, kOddWidth * kOddHeight / (grid * grid) / 2);
+    EXPECT_GT(compared, 0.9 * nodes) << "grid " << grid;
   }
 }
 

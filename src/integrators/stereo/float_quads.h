@@ -1,0 +1,25 @@
+// Four floats (or two doubles) as one value of GCC's and Clang's vector extension, whose
+// operators act lane by lane: one SSE2 instruction each on plain x86-64. The measured surface
+// works on many grid points at once with selections after comparisons, which GCC does not
+// vectorise from loops over lanes (a comparison might trap); wider vector types are split into
+// these anyway without AVX, and through memory. Internal to the stereo integrator.
+#pragma once
+
+#include <cstring>
+
+namespace occupancy_fusion {
+
+using FloatQuad = float __attribute__((vector_size(4 * sizeof(float))));
+using DoublePair = double __attribute__((vector_size(2 * sizeof(double))));
+
+inline FloatQuad loadQuad(const float* values) {
+  FloatQuad quad;
+  std::memcpy(&quad, values, sizeof(quad));
+  return quad;
+}
+
+inline void storeQuad(const FloatQuad& quad, float* values) {
+  std::memcpy(values, &quad, sizeof(quad));
+}
+
+}  // namespace occupancy_fusion
