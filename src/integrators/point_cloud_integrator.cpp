@@ -32,6 +32,40 @@ std::uint32_t VoxelUpdateSet::slotOf(const BlockIndex& block) {
   return it->second;
 }
 
+void VoxelUpdateSet::markFreeTowardsEnd(RayTraversal* ray) {
+  const int steps = ray->stepsToEnd();
+  if (steps == 0) return;
+  constexpr int kShift = VoxelBlock::kSideLog2;
+  constexpr int kMask = VoxelBlock::kSide - 1;
+  std::uint64_t* words = nullptr;  // the free mask of the current voxel's block
+  int linear = 0;                  // the current voxel's bit in it
+  const auto enter_block = [&](const VoxelIndex& index) {
+    const BlockIndex block(index.x() >> kShift, index.y() >> kShift, index.z() >> kShift);
+    if (block != last_.block) last_ = {block, slotOf(block)};
+    words = masks_[last_.slot].free.data();
+    linear = VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
+  };
+  const auto set_bit = [&] { words[linear >> 6] |= std::uint64_t{1} << (linear & 63); };
+  enter_block(ray->current());
+  set_bit();
+  // A step along an axis moves the bit by that axis' stride, unless it leaves the block: then
+  // the new voxel's local coordinate on that axis is the first one in the step's direction.
+  const int strides[3] = {ray->stepOf(0), ray->stepOf(1) * VoxelBlock::kSide,
+                          ray->stepOf(2) * VoxelBlock::kSide * VoxelBlock::kSide};
+  const int entry_local[3] = {ray->stepOf(0) > 0 ? 0 : kMask, ray->stepOf(1) > 0 ? 0 : kMask,
+                              ray->stepOf(2) > 0 ? 0 : kMask};
+  ray->walkAxesTowardsEnd(steps - 1, [&](const VoxelIndex& voxel, auto axis) {
+    constexpr int a = decltype(axis)::value;
+    if ((voxel[a] & kMask) == entry_local[a]) {
+      enter_block(voxel);
+    } else {
+      linear += strides[a];
+    }
+    set_bit();
+  });
+  ray->next();  // onto the end voxel
+}
+
 void VoxelUpdateSet::merge(const VoxelUpdateSet& other) {
   slots_.reserve(keys_.size() + other.keys_.size());
   for (std::size_t theirs = 0; theirs < other.keys_.size(); ++theirs) {
@@ -111,10 +145,12 @@ PointCloudIntegrator::PointCloudIntegrator(const PointCloudIntegratorConfig& con
 
 namespace {
 
-// The same range as VoxelMap::isInRange, without needing a map.
-bool isRepresentable(const Eigen::Vector3d& point, double resolution) {
+// The same range as VoxelMap::isInRange, without needing a map. NaN and infinity fail the
+// comparisons.
+inline bool isRepresentable(const Eigen::Vector3d& point, double resolution) {
   const double limit = VoxelMap::kMaxCoordinateVoxels * resolution;
-  return point.allFinite() && (point.array().abs() < limit).all();
+  return (std::abs(point.x()) < limit) & (std::abs(point.y()) < limit) &
+         (std::abs(point.z()) < limit);
 }
 
 // One point of OctoMap's computeUpdate (its no-bounding-box branch).
@@ -122,13 +158,14 @@ void castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& point, double
              double resolution, VoxelUpdateSet* update) {
   const Eigen::Vector3d ray = point - origin;
   const double distance = ray.norm();
-  auto mark_free = [update](const VoxelIndex& index) { update->markFree(index); };
   if (max_range < 0.0 || distance <= max_range) {
-    forEachVoxelOnRay(origin, point, resolution, RayEnd::kExclude, mark_free);
+    RayTraversal walk(origin, point, resolution);
+    update->markFreeTowardsEnd(&walk);
     update->markOccupied(voxelIndexOf(point, resolution));
   } else {
     const Eigen::Vector3d clipped_end = origin + ray * (max_range / distance);
-    forEachVoxelOnRay(origin, clipped_end, resolution, RayEnd::kExclude, mark_free);
+    RayTraversal walk(origin, clipped_end, resolution);
+    update->markFreeTowardsEnd(&walk);
   }
 }
 

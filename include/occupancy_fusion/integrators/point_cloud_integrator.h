@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
@@ -54,6 +55,10 @@ class VoxelUpdateSet {
   // markOccupied, and whether the voxel was not marked occupied before (a set of voxels that is
   // cheap where consecutive ones share blocks).
   bool markOccupiedFirst(const VoxelIndex& index) { return mark(index, true); }
+  // markFree for each voxel of the ray's walk from current() up to, not including, its end
+  // voxel (OctoMap's free space of a hit); the ray is left at the end voxel. The same marks as
+  // markFree per voxel, with the block's words found once per block the ray enters.
+  void markFreeTowardsEnd(RayTraversal* ray);
   // Union with another set (e.g. one computed on another thread).
   void merge(const VoxelUpdateSet& other);
   void clear();

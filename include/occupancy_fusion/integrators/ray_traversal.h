@@ -91,11 +91,24 @@ class RayTraversal {
   }
 
   // `steps` (<= stepsToEnd()) calls of stepTowardsEnd(), each followed by fn(current()); fn may
-  // return bool: false stops the walk. Returns the calls of fn made. The same steps, with the
-  // walk's state in locals: indexing the members by the chosen axis keeps them in memory, and
-  // each step then waits for the store of the one before.
+  // return bool: false stops the walk. Returns the calls of fn made.
   template <typename VoxelFn>
   int walkTowardsEnd(int steps, VoxelFn&& fn) {
+    return walkAxesTowardsEnd(steps,
+                              [&fn](const VoxelIndex& voxel, auto /*axis*/) { return fn(voxel); });
+  }
+
+  // walkTowardsEnd with fn(current(), axis), axis the std::integral_constant<int, 0, 1 or 2> of
+  // the step just made, for callers that follow the walk incrementally. The walk's state is in
+  // locals: indexing the members by the chosen axis keeps them in memory, and each step then
+  // waits for the store of the one before.
+  template <typename VoxelAxisFn>
+  int walkAxesTowardsEnd(int steps, VoxelAxisFn&& fn) {
+    using X = std::integral_constant<int, 0>;
+    using Y = std::integral_constant<int, 1>;
+    using Z = std::integral_constant<int, 2>;
+    constexpr bool kMayStop =
+        std::is_same_v<std::invoke_result_t<VoxelAxisFn&, const VoxelIndex&, X>, bool>;
     double tx = t_max_[0], ty = t_max_[1], tz = t_max_[2];
     const double dx = t_delta_[0], dy = t_delta_[1], dz = t_delta_[2];
     const int sx = step_[0], sy = step_[1], sz = step_[2];
@@ -103,30 +116,40 @@ class RayTraversal {
     VoxelIndex voxel = current_;
     double t_entry = t_entry_;
     int calls = 0;
+    auto visit = [&](auto axis) {
+      if constexpr (kMayStop) {
+        return fn(static_cast<const VoxelIndex&>(voxel), axis);
+      } else {
+        fn(static_cast<const VoxelIndex&>(voxel), axis);
+        return true;
+      }
+    };
     while (calls < steps) {
+      bool go_on;
       // nextAxis(): ties step x before y before z.
       if (tx <= ty && tx <= tz) {
         voxel.x() += sx;
         t_entry = tx;
         tx += dx;
         if (--rx == 0) beyond_t_max_[0] = tx, tx = kInfinity;
+        ++calls;
+        go_on = visit(X{});
       } else if (ty <= tz) {
         voxel.y() += sy;
         t_entry = ty;
         ty += dy;
         if (--ry == 0) beyond_t_max_[1] = ty, ty = kInfinity;
+        ++calls;
+        go_on = visit(Y{});
       } else {
         voxel.z() += sz;
         t_entry = tz;
         tz += dz;
         if (--rz == 0) beyond_t_max_[2] = tz, tz = kInfinity;
+        ++calls;
+        go_on = visit(Z{});
       }
-      ++calls;
-      if constexpr (std::is_same_v<std::invoke_result_t<VoxelFn&, const VoxelIndex&>, bool>) {
-        if (!fn(static_cast<const VoxelIndex&>(voxel))) break;
-      } else {
-        fn(static_cast<const VoxelIndex&>(voxel));
-      }
+      if (!go_on) break;
     }
     t_max_[0] = tx, t_max_[1] = ty, t_max_[2] = tz;
     remaining_[0] = rx, remaining_[1] = ry, remaining_[2] = rz;
@@ -135,6 +158,9 @@ class RayTraversal {
     steps_left_ -= calls;
     return calls;
   }
+
+  // The direction of the walk's steps along an axis: +1, -1, or 0 when it never steps along it.
+  int stepOf(int axis) const { return step_[axis]; }
 
   // next() for the hot loop of a segment walk. Precondition: beforeEnd().
   void stepTowardsEnd() {

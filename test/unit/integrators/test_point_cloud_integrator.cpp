@@ -433,6 +433,36 @@ TEST(VoxelUpdateSet, MarksMergesAndCounts) {
   EXPECT_TRUE(copy.isFree(VoxelIndex(100, 100, 100)));
 }
 
+// markFreeTowardsEnd follows the walk block by block (a bit stride per step, the block's words
+// found again only where the ray leaves a block): the same set as markFree on each voxel the walk
+// visits before the end voxel, for rays across many blocks in both directions along every axis,
+// along the axes, inside one voxel and around the origin (negative indices), and the ray is
+// left on its end voxel.
+TEST(VoxelUpdateSet, MarkingFreeTowardsTheEndEqualsMarkingEachVoxel) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> coordinate(-4.0, 4.0);
+  int blocks_crossed = 0;
+  for (int i = 0; i < 600; ++i) {
+    const double r = i % 3 == 0 ? 0.05 : 0.1;
+    const Eigen::Vector3d s(coordinate(rng), coordinate(rng), coordinate(rng));
+    Eigen::Vector3d e(coordinate(rng), coordinate(rng), coordinate(rng));
+    if (i % 7 == 0) e[i % 3] = s[i % 3];       // no step along one axis
+    if (i % 11 == 0) e = s + (e - s) * 0.001;  // within a voxel or two
+    if (i % 13 == 0) e = s, e[i % 3] += 2.0;   // along one axis
+    VoxelUpdateSet expected, marked;
+    forEachVoxelOnRay(s, e, r, RayEnd::kExclude,
+                      [&](const VoxelIndex& index) { expected.markFree(index); });
+    RayTraversal ray(s, e, r);
+    marked.markFreeTowardsEnd(&ray);
+    EXPECT_EQ(ray.current(), voxelIndexOf(e, r)) << i;
+    ASSERT_EQ(marked.freeCount(), expected.freeCount()) << i;
+    ASSERT_EQ(marked.blocks().size(), expected.blocks().size()) << i;
+    expected.forEachFree([&](const VoxelIndex& index) { ASSERT_TRUE(marked.isFree(index)) << i; });
+    blocks_crossed += static_cast<int>(marked.blocks().size()) > 1;
+  }
+  EXPECT_GT(blocks_crossed, 400);
+}
+
 TEST(PointCloudIntegratorConfig, RejectsNaNMaxRange) {
   PointCloudIntegratorConfig config;
   config.max_range = std::nan("");

@@ -223,6 +223,30 @@ TEST(RayTraversal, WalkingInOneCallEqualsSteppingOneByOne) {
   EXPECT_GT(stopped_early, 100);
 }
 
+// walkAxesTowardsEnd names the axis of each step: the one coordinate that changed, by the
+// ray's step along it.
+TEST(RayTraversal, WalkingByAxisNamesTheAxisOfEachStep) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
+  int per_axis[3] = {0, 0, 0};
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3d s(coordinate(rng), coordinate(rng), coordinate(rng));
+    const Eigen::Vector3d e(coordinate(rng), coordinate(rng), coordinate(rng));
+    RayTraversal ray(s, e, 0.1);
+    VoxelIndex previous = ray.current();
+    ray.walkAxesTowardsEnd(ray.stepsToEnd(), [&](const VoxelIndex& voxel, auto axis) {
+      constexpr int a = decltype(axis)::value;
+      VoxelIndex expected = previous;
+      expected[a] += ray.stepOf(a);
+      ASSERT_EQ(voxel, expected) << i;
+      ++per_axis[a];
+      previous = voxel;
+    });
+    ASSERT_EQ(previous, voxelIndexOf(e, 0.1)) << i;
+  }
+  for (int a = 0; a < 3; ++a) EXPECT_GT(per_axis[a], 1000);
+}
+
 TEST(RayTraversal, MatchesBruteForceOnRandomSegments) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
