@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <functional>
 #include <iostream>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <string>
@@ -120,6 +121,30 @@ RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, dou
   return {total / clouds.size(), median(ms), map.memoryBytes()};
 }
 
+// Ours for bench::runPeers' pairs: cloud i into a map of its own, a new one at cloud 0.
+class PairedOurs {
+ public:
+  PairedOurs(double resolution, bool discretize) : integrator_(configFor(discretize)) {
+    map_config_.resolution = resolution;
+  }
+  double insert(std::size_t i, const SensorCloud& cloud) {
+    if (i == 0 || map_ == nullptr) map_ = std::make_unique<VoxelMap>(map_config_);
+    const auto start = Clock::now();
+    integrator_.integrate(cloud.points, cloud.origin, map_.get());
+    return millisecondsSince(start);
+  }
+
+ private:
+  static PointCloudIntegratorConfig configFor(bool discretize) {
+    PointCloudIntegratorConfig config;
+    config.discretize = discretize;
+    return config;
+  }
+  VoxelMapConfig map_config_;
+  PointCloudIntegrator integrator_;
+  std::unique_ptr<VoxelMap> map_;
+};
+
 RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                      const std::vector<SensorCloud>& sources, double resolution, double max_range,
                      bool discretize) {
@@ -181,17 +206,22 @@ int runPointCloud(const CommandLine& args) {
       // range.
       std::string peer_fields;
       if (max_range < 0) {
-        for (const bench::PeerRun& peer : bench::runPeers(peer_points, peer_origins, resolution)) {
-          char field[160];
-          std::snprintf(field, sizeof(field), " %s_ms_per_cloud=%.3f time_ratio_%s=%.3f",
+        PairedOurs paired(resolution, discretize);
+        for (const bench::PeerRun& peer :
+             bench::runPeers(peer_points, peer_origins, resolution,
+                             [&](std::size_t i) { return paired.insert(i, clouds[i]); })) {
+          char field[200];
+          std::snprintf(field, sizeof(field),
+                        " %s_ms_per_cloud=%.3f time_ratio_%s=%.3f paired_time_ratio_%s=%.3f",
                         peer.name.c_str(), peer.median_ms, peer.name.c_str(),
-                        ours_cloud_median / peer.median_ms);
+                        ours_cloud_median / peer.median_ms, peer.name.c_str(), peer.paired_ratio);
           peer_fields += field;
         }
       }
       std::printf(
           "pointcloud resolution=%g points=%zu ms_per_cloud=%.3f median_cloud_ms=%.3f "
-          "octomap_ms_per_cloud=%.3f time_ratio=%.3f memory_ratio=%.3f threads=%d discretize=%d%s\n",
+          "octomap_ms_per_cloud=%.3f time_ratio=%.3f memory_ratio=%.3f threads=%d "
+          "discretize=%d%s\n",
           resolution, total_points / clouds.size(), ours_median, ours_cloud_median, octomap_median,
           ours_median / octomap_median,
           static_cast<double>(ours.memory_bytes) / static_cast<double>(theirs.memory_bytes),

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <ctime>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -214,8 +215,10 @@ int runDepth(const CommandLine& args) {
   const int octomap_count = std::min<int>(octomap_frames, static_cast<int>(frames.size()));
   std::vector<octomap::Pointcloud> clouds;
   std::vector<Eigen::Vector3d> origins;
+  std::vector<std::size_t> cloud_frames;  // the frame of each cloud
   for (int i = 0; i < octomap_count; ++i) {
-    const SevenScenesFrame& frame = frames[i * frames.size() / octomap_count];
+    cloud_frames.push_back(i * frames.size() / octomap_count);
+    const SevenScenesFrame& frame = frames[cloud_frames.back()];
     clouds.push_back(worldPoints(frame, camera));
     origins.push_back(frame.T_world_camera.translation());
   }
@@ -247,11 +250,26 @@ int runDepth(const CommandLine& args) {
     }
     std::string peer_fields;
     if (octomap_count > 0) {
-      for (const bench::PeerRun& peer : bench::runPeers(peer_clouds, origins, resolution)) {
-        char field[160];
+      // Paired: the frame each peer cloud came from, into a map of ours that sees only those.
+      std::unique_ptr<VoxelMap> paired_map;
+      const bench::PairedInsert paired = [&](std::size_t i) {
+        if (i == 0 || paired_map == nullptr) {
+          VoxelMapConfig map_config;
+          map_config.resolution = resolution;
+          paired_map = std::make_unique<VoxelMap>(map_config);
+        }
+        const SevenScenesFrame& frame = frames[cloud_frames[i]];
+        const auto start = Clock::now();
+        integrator.integrate(frame.view(camera), camera, frame.T_world_camera, paired_map.get());
+        return millisecondsSince(start);
+      };
+      for (const bench::PeerRun& peer : bench::runPeers(peer_clouds, origins, resolution, paired)) {
+        char field[200];
         std::snprintf(field, sizeof(field),
-                      " %s_ms_per_frame=%.2f speedup_%s=%.1f %s_memory_mb=%.1f", peer.name.c_str(),
-                      peer.median_ms, peer.name.c_str(), peer.median_ms / ours.median_ms,
+                      " %s_ms_per_frame=%.2f speedup_%s=%.1f paired_speedup_%s=%.1f "
+                      "%s_memory_mb=%.1f",
+                      peer.name.c_str(), peer.median_ms, peer.name.c_str(),
+                      peer.median_ms / ours.median_ms, peer.name.c_str(), 1.0 / peer.paired_ratio,
                       peer.name.c_str(), peer.memory_mb);
         peer_fields += field;
       }

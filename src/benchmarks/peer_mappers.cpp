@@ -16,21 +16,26 @@ namespace occupancy_fusion {
 namespace bench {
 namespace {
 
-// Median wall milliseconds of insert(i) over the clouds.
+// The median wall milliseconds of insert(i) over the clouds, and with `ours` the median of
+// ours(i) / insert(i), ours(i) run just before.
 template <typename Insert>
-double timeEach(std::size_t clouds, Insert&& insert) {
-  std::vector<double> ms;
+void timeEach(std::size_t clouds, const PairedInsert& ours, Insert&& insert, PeerRun* run) {
+  std::vector<double> ms, ratios;
   for (std::size_t i = 0; i < clouds; ++i) {
+    const double ours_ms = ours ? ours(i) : 0.0;
     const Clock::time_point start = Clock::now();
     insert(i);
     ms.push_back(millisecondsSince(start));
+    if (ours) ratios.push_back(ours_ms / ms.back());
   }
-  return median(ms);
+  run->median_ms = median(ms);
+  if (!ratios.empty()) run->paired_ratio = median(ratios);
 }
 
 #ifdef OCCUPANCY_FUSION_WITH_BONXAI
 PeerRun runBonxai(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
-                  const std::vector<Eigen::Vector3d>& origins, double resolution) {
+                  const std::vector<Eigen::Vector3d>& origins, double resolution,
+                  const PairedInsert& ours) {
   const OccupancyModel model;
   Bonxai::ProbabilisticMap map(resolution);
   Bonxai::ProbabilisticMap::Options options;
@@ -45,9 +50,12 @@ PeerRun runBonxai(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
     for (const Eigen::Vector3f& p : clouds[i]) points[i].push_back(p.cast<double>());
   }
   PeerRun run{"bonxai"};
-  run.median_ms = timeEach(clouds.size(), [&](std::size_t i) {
-    map.insertPointCloud(points[i], origins[i], std::numeric_limits<double>::infinity());
-  });
+  timeEach(
+      clouds.size(), ours,
+      [&](std::size_t i) {
+        map.insertPointCloud(points[i], origins[i], std::numeric_limits<double>::infinity());
+      },
+      &run);
   run.memory_mb = map.grid().memUsage() * 1e-6;
   return run;
 }
@@ -55,7 +63,8 @@ PeerRun runBonxai(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
 
 #ifdef OCCUPANCY_FUSION_WITH_UFOMAP
 PeerRun runUfomap(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
-                  const std::vector<Eigen::Vector3d>& origins, double resolution) {
+                  const std::vector<Eigen::Vector3d>& origins, double resolution,
+                  const PairedInsert& ours) {
   const OccupancyModel model;
   ufo::map::OccupancyMap map(resolution);
   map.setProbHit(model.prob_hit);
@@ -70,10 +79,13 @@ PeerRun runUfomap(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
   // UFOMap's fast mode: the end points discretised to voxels (as liboctomap's discretize), free
   // space at the finest depth, its own ray casting.
   PeerRun run{"ufomap_discrete"};
-  run.median_ms = timeEach(clouds.size(), [&](std::size_t i) {
-    const ufo::map::Point3 origin(origins[i].x(), origins[i].y(), origins[i].z());
-    map.insertPointCloudDiscrete(origin, points[i], -1, 0);
-  });
+  timeEach(
+      clouds.size(), ours,
+      [&](std::size_t i) {
+        const ufo::map::Point3 origin(origins[i].x(), origins[i].y(), origins[i].z());
+        map.insertPointCloudDiscrete(origin, points[i], -1, 0);
+      },
+      &run);
   run.memory_mb = map.memoryUsage() * 1e-6;
   return run;
 }
@@ -93,17 +105,19 @@ std::vector<std::string> compiledPeers() {
 }
 
 std::vector<PeerRun> runPeers(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
-                              const std::vector<Eigen::Vector3d>& origins, double resolution) {
+                              const std::vector<Eigen::Vector3d>& origins, double resolution,
+                              const PairedInsert& ours) {
   std::vector<PeerRun> runs;
 #ifdef OCCUPANCY_FUSION_WITH_BONXAI
-  runs.push_back(runBonxai(clouds, origins, resolution));
+  runs.push_back(runBonxai(clouds, origins, resolution, ours));
 #endif
 #ifdef OCCUPANCY_FUSION_WITH_UFOMAP
-  runs.push_back(runUfomap(clouds, origins, resolution));
+  runs.push_back(runUfomap(clouds, origins, resolution, ours));
 #endif
   static_cast<void>(clouds);
   static_cast<void>(origins);
   static_cast<void>(resolution);
+  static_cast<void>(ours);
   return runs;
 }
 

@@ -6,6 +6,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
+#include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -16,7 +19,17 @@ struct PeerRun {
   std::string name;        // e.g. "bonxai", "ufomap_discrete"
   double median_ms = 0.0;  // per cloud, wall
   double memory_mb = 0.0;  // the map's own figure after the last cloud
+  // The median over the clouds of ours' time over the peer's, each pair timed back to back
+  // (see PairedInsert); NaN without one.
+  double paired_ratio = std::numeric_limits<double>::quiet_NaN();
 };
+
+// This package's insertion of cloud i (or of the frame it came from) into a map of its own (a
+// new one when i is 0), returning its wall milliseconds. runPeers calls it just before each
+// peer inserts the same cloud, so that a ratio is taken from two runs milliseconds apart: on a
+// shared machine whose speed drifts by tens of percent within a run, the ratio of two medians
+// taken seconds apart does not hold still.
+using PairedInsert = std::function<double(std::size_t cloud)>;
 
 // The peers compiled in, in a fixed order; empty when none is.
 std::vector<std::string> compiledPeers();
@@ -25,7 +38,8 @@ std::vector<std::string> compiledPeers();
 // the given voxel size, with the hit / miss / clamping probabilities of OccupancyModel and no
 // range limit, in the peer's recommended fast mode.
 std::vector<PeerRun> runPeers(const std::vector<std::vector<Eigen::Vector3f>>& clouds,
-                              const std::vector<Eigen::Vector3d>& origins, double resolution);
+                              const std::vector<Eigen::Vector3d>& origins, double resolution,
+                              const PairedInsert& ours = {});
 
 }  // namespace bench
 }  // namespace occupancy_fusion

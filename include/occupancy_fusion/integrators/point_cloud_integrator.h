@@ -94,7 +94,7 @@ class VoxelUpdateSet {
     BlockIndex block;
     std::uint32_t slot;
   };
-  static constexpr int kRecentBlocks = 64;  // direct-mapped by the block's coordinates
+  static constexpr int kRecentBlocks = 1024;  // direct-mapped by the block's coordinates
 
   void forgetRecentBlocks() {
     // No block has these coordinates: indices are at most 2^20 voxels from the origin.
