@@ -206,6 +206,7 @@ int runPointCloud(const CommandLine& args) {
       // range.
       std::string peer_fields;
       if (max_range < 0) {
+        omp_set_num_threads(threads);  // for ours in the pairs, after liboctomap
         PairedOurs paired(resolution, discretize);
         for (const bench::PeerRun& peer :
              bench::runPeers(peer_points, peer_origins, resolution,
@@ -259,14 +260,15 @@ const std::vector<Workload>& workloads() {
        {"known_voxels", "changed_blocks", "repetitions", "resolution"},
        runPublish},
       {"depth",
-       "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--k K] "
-       "[--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal] [--image PNG]\n"
-       "      [--finer_layers F]\n"
+       "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--peer-frames P]\n"
+       "      [--k K] [--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal]\n"
+       "      [--image PNG] [--finer_layers F]\n"
        "      a depth sequence in the 7-Scenes layout through the pyramidal depth integrator,\n"
        "      and K of its frames as point clouds through octomap::OcTree::insertPointCloud\n"
-       "      (plain and discretized); speedup is octomap / ours in ms per frame",
-       {"folder", "resolution", "frames", "octomap-frames", "k", "sigma", "sigma_quadratic",
-        "method", "image", "finer_layers"},
+       "      (plain and discretized); speedup is octomap / ours in ms per frame; the peers\n"
+       "      compiled in on P frames (default all), paired frame by frame with ours",
+       {"folder", "resolution", "frames", "octomap-frames", "peer-frames", "k", "sigma",
+        "sigma_quadratic", "method", "image", "finer_layers"},
        runDepth},
       {"depth-fig5",
        "[--output PNG] [--sweep_max PX] [--finer_layers F]\n"

@@ -159,14 +159,18 @@ OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntr
           bench::median(frame_cpu_ms), mapHash(map)};
 }
 
-// The same clouds for the peers (benchmarks/peer_mappers.h).
-std::vector<std::vector<Eigen::Vector3f>> eigenClouds(
-    const std::vector<octomap::Pointcloud>& clouds) {
-  std::vector<std::vector<Eigen::Vector3f>> result(clouds.size());
-  for (std::size_t i = 0; i < clouds.size(); ++i) {
-    result[i].reserve(clouds[i].size());
-    for (const octomap::point3d& p : clouds[i]) result[i].emplace_back(p.x(), p.y(), p.z());
-  }
+// A cloud for the peers (benchmarks/peer_mappers.h).
+std::vector<Eigen::Vector3f> eigenCloud(const octomap::Pointcloud& cloud) {
+  std::vector<Eigen::Vector3f> result;
+  result.reserve(cloud.size());
+  for (const octomap::point3d& p : cloud) result.emplace_back(p.x(), p.y(), p.z());
+  return result;
+}
+
+// `count` frame numbers of `total`, evenly spread from the first.
+std::vector<std::size_t> spreadOver(int count, std::size_t total) {
+  std::vector<std::size_t> result;
+  for (int i = 0; i < count; ++i) result.push_back(i * total / count);
   return result;
 }
 
@@ -193,9 +197,10 @@ int runDepth(const CommandLine& args) {
       "resolution", args.value("resolution", "0.02,0.04,0.08,0.16"));
   const int frame_limit = args.intValue("frames", static_cast<int>(folder.size()));
   const int octomap_frames = args.intValue("octomap-frames", 2);
+  const int peer_frames = args.intValue("peer-frames", frame_limit);
   const std::string image_path = args.value("image", "");
-  if (frame_limit < 1 || octomap_frames < 0) {
-    throw UsageError("--frames must be >= 1 and --octomap-frames >= 0");
+  if (frame_limit < 1 || octomap_frames < 0 || peer_frames < 0) {
+    throw UsageError("--frames must be >= 1, --octomap-frames and --peer-frames >= 0");
   }
   // A Kinect's noise is centimetres at 1-3 m: the paper's k = sigma = 0.6 shape, scaled.
   PyramidDepthConfig config;
@@ -211,18 +216,24 @@ int runDepth(const CommandLine& args) {
   for (std::size_t i = 0; i < std::min<std::size_t>(folder.size(), frame_limit); ++i) {
     frames.push_back(folder.frame(i));
   }
-  // liboctomap is slow at fine resolutions: every step-th frame, spread over the sequence.
+  // liboctomap is slow at fine resolutions: every step-th frame, spread over the sequence. The
+  // peers take every frame by default, as a camera streams them (consecutive frames overlap, so
+  // most of a frame's voxels are in the map already).
   const int octomap_count = std::min<int>(octomap_frames, static_cast<int>(frames.size()));
   std::vector<octomap::Pointcloud> clouds;
   std::vector<Eigen::Vector3d> origins;
-  std::vector<std::size_t> cloud_frames;  // the frame of each cloud
-  for (int i = 0; i < octomap_count; ++i) {
-    cloud_frames.push_back(i * frames.size() / octomap_count);
-    const SevenScenesFrame& frame = frames[cloud_frames.back()];
-    clouds.push_back(worldPoints(frame, camera));
-    origins.push_back(frame.T_world_camera.translation());
+  for (std::size_t f : spreadOver(octomap_count, frames.size())) {
+    clouds.push_back(worldPoints(frames[f], camera));
+    origins.push_back(frames[f].T_world_camera.translation());
   }
-  const std::vector<std::vector<Eigen::Vector3f>> peer_clouds = eigenClouds(clouds);
+  const std::vector<std::size_t> peer_cloud_frames =
+      spreadOver(std::min<int>(peer_frames, static_cast<int>(frames.size())), frames.size());
+  std::vector<std::vector<Eigen::Vector3f>> peer_clouds;
+  std::vector<Eigen::Vector3d> peer_origins;
+  for (std::size_t f : peer_cloud_frames) {
+    peer_clouds.push_back(eigenCloud(worldPoints(frames[f], camera)));
+    peer_origins.push_back(frames[f].T_world_camera.translation());
+  }
   std::string peers;
   for (const std::string& name : bench::compiledPeers()) peers += (peers.empty() ? "" : ",") + name;
   std::printf(
@@ -231,10 +242,11 @@ int runDepth(const CommandLine& args) {
   const int threads = omp_get_max_threads();
   std::printf(
       "# %zu frames of %dx%d, fx=%g; method=%s k=%g sigma=%g sigma_quadratic=%g "
-      "finer_layers=%d threads=%d; octomap on %d of the frames (--octomap-frames), max_range "
-      "unlimited\n",
+      "finer_layers=%d threads=%d; octomap on %d of the frames (--octomap-frames), the peers "
+      "on %zu (--peer-frames), max_range unlimited\n",
       frames.size(), camera.width, camera.height, camera.fx, toString(config.method).c_str(),
-      config.k, config.sigma, config.sigma_quadratic, config.finer_layers, threads, octomap_count);
+      config.k, config.sigma, config.sigma_quadratic, config.finer_layers, threads, octomap_count,
+      peer_clouds.size());
   std::fflush(stdout);
 
   std::vector<std::string> summary;
@@ -249,7 +261,8 @@ int runDepth(const CommandLine& args) {
       discretized = runOctomap(clouds, origins, resolution, true);
     }
     std::string peer_fields;
-    if (octomap_count > 0) {
+    if (!peer_clouds.empty()) {
+      omp_set_num_threads(threads);  // for ours in the pairs, after liboctomap
       // Paired: the frame each peer cloud came from, into a map of ours that sees only those.
       std::unique_ptr<VoxelMap> paired_map;
       const bench::PairedInsert paired = [&](std::size_t i) {
@@ -258,12 +271,13 @@ int runDepth(const CommandLine& args) {
           map_config.resolution = resolution;
           paired_map = std::make_unique<VoxelMap>(map_config);
         }
-        const SevenScenesFrame& frame = frames[cloud_frames[i]];
+        const SevenScenesFrame& frame = frames[peer_cloud_frames[i]];
         const auto start = Clock::now();
         integrator.integrate(frame.view(camera), camera, frame.T_world_camera, paired_map.get());
         return millisecondsSince(start);
       };
-      for (const bench::PeerRun& peer : bench::runPeers(peer_clouds, origins, resolution, paired)) {
+      for (const bench::PeerRun& peer :
+           bench::runPeers(peer_clouds, peer_origins, resolution, paired)) {
         char field[200];
         std::snprintf(field, sizeof(field),
                       " %s_ms_per_frame=%.2f speedup_%s=%.1f paired_speedup_%s=%.1f "
