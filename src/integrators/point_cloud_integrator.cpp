@@ -6,6 +6,7 @@
 #include <bitset>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "occupancy_fusion/integrators/ray_traversal.h"
@@ -171,10 +172,13 @@ void castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& point, double
 
 // The end voxels of points [first, last) in the order of each one's first point, marked in
 // `seen` (bit masks per block: neighbouring end voxels share blocks, so a mark mostly costs no
-// table look-up); points outside the representable range are left out (and counted).
+// table look-up); points outside the representable range are left out (and counted). A point in
+// the voxel of the point before it (most of them: a voxel spans several pixels of a row) is
+// known already and needs no mark.
 void collectEndVoxels(const std::vector<Eigen::Vector3f>& points, std::size_t first,
                       std::size_t last, double resolution, VoxelUpdateSet* seen,
                       std::vector<VoxelIndex>* voxels, std::size_t* skipped) {
+  VoxelIndex previous = VoxelIndex::Constant(std::numeric_limits<int>::min());  // no voxel
   for (std::size_t i = first; i < last; ++i) {
     const Eigen::Vector3d point = points[i].cast<double>();
     if (!isRepresentable(point, resolution)) {
@@ -182,6 +186,8 @@ void collectEndVoxels(const std::vector<Eigen::Vector3f>& points, std::size_t fi
       continue;
     }
     const VoxelIndex voxel = voxelIndexOf(point, resolution);
+    if (voxel == previous) continue;
+    previous = voxel;
     if (seen->markOccupiedFirst(voxel)) voxels->push_back(voxel);
   }
 }

@@ -10,13 +10,16 @@
 #include <type_traits>
 #include <utility>
 
+#include "occupancy_fusion/map/floor_to_int.h"
+
 namespace occupancy_fusion {
 
 using VoxelIndex = Eigen::Vector3i;  // floor(p / resolution), per axis, as VoxelMap::indexOf
 
 // The voxel holding a point: the same arithmetic as VoxelMap::indexOf, without a map.
 inline VoxelIndex voxelIndexOf(const Eigen::Vector3d& point, double resolution) {
-  return (point / resolution).array().floor().cast<int>();
+  return {floorToInt(point.x() / resolution), floorToInt(point.y() / resolution),
+          floorToInt(point.z() / resolution)};
 }
 
 // Walks the voxels of a grid of cubes of edge `resolution` that the segment start -> end passes
@@ -39,8 +42,8 @@ class RayTraversal {
     const Eigen::Vector3d direction = end - start;
     length_ = direction.norm();
     for (int axis = 0; axis < 3; ++axis) {
-      const int first = static_cast<int>(std::floor(start[axis] / resolution));
-      const int last = static_cast<int>(std::floor(end[axis] / resolution));
+      const int first = floorToInt(start[axis] / resolution);
+      const int last = floorToInt(end[axis] / resolution);
       current_[axis] = first;
       remaining_[axis] = std::abs(last - first);
       const double d = direction[axis];

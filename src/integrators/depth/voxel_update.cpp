@@ -7,6 +7,7 @@
 
 #include "depth_detail.h"
 #include "occupancy_fusion/integrators/depth/pyramid_depth_integrator.h"
+#include "occupancy_fusion/map/floor_to_int.h"
 
 namespace occupancy_fusion {
 
@@ -38,16 +39,6 @@ std::optional<float> PyramidDepthIntegrator::voxelLogOdds(
   if (std::isnan(delta)) return std::nullopt;
   return delta;
 }
-
-namespace {
-
-// floor() of a double known to fit an int, without a libm call.
-int floorToInt(double x) {
-  const int truncated = static_cast<int>(x);
-  return truncated - (x < truncated);
-}
-
-}  // namespace
 
 // The per-voxel functions below are `inline` (they are private, used in this file only): in a
 // shared library built with -fPIC, GCC does not inline an ordinary member function unless
