@@ -16,6 +16,7 @@
 #include <tuple>
 #include <vector>
 
+#include "../../common/random_segments.h"
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
 
@@ -440,13 +441,10 @@ TEST(VoxelUpdateSet, MarksMergesAndCounts) {
 // left on its end voxel.
 TEST(VoxelUpdateSet, MarkingFreeTowardsTheEndEqualsMarkingEachVoxel) {
   std::mt19937 rng(23);
-  std::uniform_real_distribution<double> coordinate(-4.0, 4.0);
   int blocks_crossed = 0;
   for (int i = 0; i < 600; ++i) {
     const double r = i % 3 == 0 ? 0.05 : 0.1;
-    const Eigen::Vector3d s(coordinate(rng), coordinate(rng), coordinate(rng));
-    Eigen::Vector3d e(coordinate(rng), coordinate(rng), coordinate(rng));
-    if (i % 7 == 0) e[i % 3] = s[i % 3];       // no step along one axis
+    auto [s, e] = randomSegment(rng, i, 4.0);
     if (i % 11 == 0) e = s + (e - s) * 0.001;  // within a voxel or two
     if (i % 13 == 0) e = s, e[i % 3] += 2.0;   // along one axis
     VoxelUpdateSet expected, marked;

@@ -17,6 +17,7 @@
 #include <tuple>
 #include <vector>
 
+#include "../../common/random_segments.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
@@ -187,13 +188,10 @@ TEST(RayTraversal, ContinuesAlongTheRayBeyondTheEnd) {
 // beyond the end with next() afterwards.
 TEST(RayTraversal, WalkingInOneCallEqualsSteppingOneByOne) {
   std::mt19937 rng(17);
-  std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
   int stopped_early = 0;
   for (int i = 0; i < 1000; ++i) {
     const double r = i % 2 == 0 ? 0.1 : 0.25;
-    const Eigen::Vector3d s(coordinate(rng), coordinate(rng), coordinate(rng));
-    Eigen::Vector3d e(coordinate(rng), coordinate(rng), coordinate(rng));
-    if (i % 7 == 0) e[i % 3] = s[i % 3];  // no step along one axis
+    const auto [s, e] = randomSegment(rng, i, 3.0);
     RayTraversal stepped(s, e, r), walked(s, e, r);
     const int steps = stepped.stepsToEnd();
     // fn returns false at the stop_after-th voxel (at least the first).
@@ -227,11 +225,9 @@ TEST(RayTraversal, WalkingInOneCallEqualsSteppingOneByOne) {
 // ray's step along it.
 TEST(RayTraversal, WalkingByAxisNamesTheAxisOfEachStep) {
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> coordinate(-3.0, 3.0);
   int per_axis[3] = {0, 0, 0};
   for (int i = 0; i < 300; ++i) {
-    const Eigen::Vector3d s(coordinate(rng), coordinate(rng), coordinate(rng));
-    const Eigen::Vector3d e(coordinate(rng), coordinate(rng), coordinate(rng));
+    const auto [s, e] = randomSegment(rng, i, 3.0);
     RayTraversal ray(s, e, 0.1);
     VoxelIndex previous = ray.current();
     ray.walkAxesTowardsEnd(ray.stepsToEnd(), [&](const VoxelIndex& voxel, auto axis) {
