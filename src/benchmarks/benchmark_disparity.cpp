@@ -440,7 +440,30 @@ struct CaseResult {
   MapContents contents;
   std::size_t octomap_nodes = 0, octomap_leaves = 0;
   WalkOnly walk_only;
+  // Ours / liboctomap plain per timed frame, both on the same frame back to back (--clock).
+  std::vector<double> paired_ratios;
 };
+
+// Frames run one at a time, as one run of them all: times and counts averaged per frame, the map's
+// memory and the points of the last.
+MapRun perFrameMean(const std::vector<MapRun>& frames) {
+  MapRun mean;
+  double visits = 0.0, hits = 0.0;
+  for (const MapRun& f : frames) {
+    mean.wall_ms_per_frame += f.wall_ms_per_frame / frames.size();
+    mean.cpu_ms_per_frame += f.cpu_ms_per_frame / frames.size();
+    mean.voxel_visits_per_frame += f.voxel_visits_per_frame / frames.size();
+    mean.rays_per_frame += f.rays_per_frame / frames.size();
+    visits += f.voxel_visits_per_frame;
+    hits += f.cache_hit_rate * f.voxel_visits_per_frame;
+  }
+  if (!frames.empty()) {
+    mean.memory_bytes = frames.back().memory_bytes;
+    mean.points_per_frame = frames.back().points_per_frame;
+  }
+  mean.cache_hit_rate = visits > 0 ? hits / visits : 0.0;
+  return mean;
+}
 
 CaseResult runCase(const StereoView& view, const StereoView& truth, double resolution,
                    InputResolution input, const Options& options) {
@@ -474,9 +497,25 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
       runOctomap(cloud, one, true, &discretized_tree);
       omp_set_num_threads(options.threads);
     }
-    result.ours = runOurs(view, poses, integrator, &map);
-    result.plain = runOctomap(clouds, poses, false, &plain_tree);
-    result.discretized = runOctomap(clouds, poses, true, &discretized_tree);
+    // Frame by frame, ours then liboctomap's two modes on the same frame: each frame's ratio
+    // comes from runs milliseconds apart (a shared machine's speed drifts by tens of percent
+    // within a run).
+    std::vector<MapRun> ours_frames, plain_frames, discretized_frames;
+    for (std::size_t f = 0; f < poses.size(); ++f) {
+      const std::vector<Eigen::Isometry3d> one{poses[f]};
+      const std::vector<octomap::Pointcloud> cloud{clouds[f]};
+      ours_frames.push_back(runOurs(view, one, integrator, &map));
+      plain_frames.push_back(runOctomap(cloud, one, false, &plain_tree));
+      discretized_frames.push_back(runOctomap(cloud, one, true, &discretized_tree));
+      omp_set_num_threads(options.threads);
+      const auto ms = [&](const MapRun& run) {
+        return options.cpu_clock ? run.cpu_ms_per_frame : run.wall_ms_per_frame;
+      };
+      result.paired_ratios.push_back(ms(ours_frames.back()) / ms(plain_frames.back()));
+    }
+    result.ours = perFrameMean(ours_frames);
+    result.plain = perFrameMean(plain_frames);
+    result.discretized = perFrameMean(discretized_frames);
     for (MapRun* run : {&result.ours, &result.plain, &result.discretized}) {
       run->ms_per_frame = options.cpu_clock ? run->cpu_ms_per_frame : run->wall_ms_per_frame;
       wall_ms[run == &result.ours    ? 0
@@ -519,7 +558,7 @@ void printCase(const char* prefix, const CaseResult& c) {
       "time_ratio_discretize=%.3f memory_kb=%.0f octomap_memory_kb=%.0f memory_ratio=%.3f "
       "cache_hit_rate=%.3f occupied=%zu off_surface=%zu octomap_occupied=%zu "
       "octomap_off_surface=%zu coverage=%.3f octomap_coverage=%.3f wall_ms_per_frame=%.2f "
-      "octomap_wall_ms_per_frame=%.2f\n",
+      "octomap_wall_ms_per_frame=%.2f paired_time_ratio=%.3f\n",
       prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(),
       c.ours.points_per_frame, c.ours.ms_per_frame, c.plain.ms_per_frame,
       c.discretized.ms_per_frame, c.ours.ms_per_frame / c.plain.ms_per_frame,
@@ -527,7 +566,8 @@ void printCase(const char* prefix, const CaseResult& c) {
       c.plain.memory_bytes / 1024.0,
       static_cast<double>(c.ours.memory_bytes) / c.plain.memory_bytes, c.ours.cache_hit_rate,
       c.ours_occupied, c.ours_off_surface, c.octomap_occupied, c.octomap_off_surface,
-      c.ours_coverage, c.octomap_coverage, c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame);
+      c.ours_coverage, c.octomap_coverage, c.ours.wall_ms_per_frame, c.plain.wall_ms_per_frame,
+      bench::median(c.paired_ratios));
   // Where the memory goes: dense blocks against the octree's (pruned) nodes.
   const MapContents& m = c.contents;
   // The blocks alone, without the hash table and VoxelMap's change log (which memoryBytes()
@@ -761,6 +801,7 @@ int runDisparity(const CommandLine& args) {
     for (double resolution : options.resolutions) {
       for (InputResolution input : options.inputs) {
         double ours_ms = 0, plain_ms = 0, discretized_ms = 0, ours_mem = 0, octomap_mem = 0;
+        std::vector<double> paired;
         int scenes = 0;
         for (const CaseResult& c : results) {
           if (c.source != source || c.resolution != resolution || c.input != input) continue;
@@ -769,6 +810,7 @@ int runDisparity(const CommandLine& args) {
           discretized_ms += c.discretized.ms_per_frame;
           ours_mem += c.ours.memory_bytes;
           octomap_mem += c.plain.memory_bytes;
+          paired.insert(paired.end(), c.paired_ratios.begin(), c.paired_ratios.end());
           ++scenes;
         }
         if (scenes == 0) continue;
@@ -776,12 +818,12 @@ int runDisparity(const CommandLine& args) {
             "disparity resolution=%g input=%s ms_per_frame=%.2f octomap_ms_per_frame=%.2f "
             "time_ratio=%.3f memory_ratio=%.3f source=%s scenes=%d "
             "octomap_discretize_ms_per_frame=%.2f time_ratio_discretize=%.3f threads=%d clock=%s "
-            "warmup=%d bundle_rays=%s method=%s\n",
+            "warmup=%d bundle_rays=%s method=%s paired_time_ratio=%.3f\n",
             resolution, toString(input).c_str(), ours_ms / scenes, plain_ms / scenes,
             ours_ms / plain_ms, ours_mem / octomap_mem, source.c_str(), scenes,
             discretized_ms / scenes, ours_ms / discretized_ms, options.threads,
             options.cpu_clock ? "cpu" : "wall", options.warmup, g_bundle_rays ? "true" : "false",
-            toString(g_method).c_str());
+            toString(g_method).c_str(), bench::median(paired));
       }
     }
   }
