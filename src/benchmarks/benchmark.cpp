@@ -121,30 +121,6 @@ RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, dou
   return {total / clouds.size(), median(ms), map.memoryBytes()};
 }
 
-// Ours for bench::runPeers' pairs: cloud i into a map of its own, a new one at cloud 0.
-class PairedOurs {
- public:
-  PairedOurs(double resolution, bool discretize) : integrator_(configFor(discretize)) {
-    map_config_.resolution = resolution;
-  }
-  double insert(std::size_t i, const SensorCloud& cloud) {
-    if (i == 0 || map_ == nullptr) map_ = std::make_unique<VoxelMap>(map_config_);
-    const auto start = Clock::now();
-    integrator_.integrate(cloud.points, cloud.origin, map_.get());
-    return millisecondsSince(start);
-  }
-
- private:
-  static PointCloudIntegratorConfig configFor(bool discretize) {
-    PointCloudIntegratorConfig config;
-    config.discretize = discretize;
-    return config;
-  }
-  VoxelMapConfig map_config_;
-  PointCloudIntegrator integrator_;
-  std::unique_ptr<VoxelMap> map_;
-};
-
 RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                      const std::vector<SensorCloud>& sources, double resolution, double max_range,
                      bool discretize) {
@@ -207,10 +183,21 @@ int runPointCloud(const CommandLine& args) {
       std::string peer_fields;
       if (max_range < 0) {
         omp_set_num_threads(threads);  // for ours in the pairs, after liboctomap
-        PairedOurs paired(resolution, discretize);
+        // Paired: cloud i into a map of ours of its own, a new one at cloud 0.
+        PointCloudIntegratorConfig config;
+        config.discretize = discretize;
+        const PointCloudIntegrator integrator(config);
+        VoxelMapConfig map_config;
+        map_config.resolution = resolution;
+        std::unique_ptr<VoxelMap> paired_map;
+        const bench::PairedInsert paired = [&](std::size_t i) {
+          if (i == 0 || paired_map == nullptr) paired_map = std::make_unique<VoxelMap>(map_config);
+          const auto start = Clock::now();
+          integrator.integrate(clouds[i].points, clouds[i].origin, paired_map.get());
+          return millisecondsSince(start);
+        };
         for (const bench::PeerRun& peer :
-             bench::runPeers(peer_points, peer_origins, resolution,
-                             [&](std::size_t i) { return paired.insert(i, clouds[i]); })) {
+             bench::runPeers(peer_points, peer_origins, resolution, paired)) {
           char field[200];
           std::snprintf(field, sizeof(field),
                         " %s_ms_per_cloud=%.3f time_ratio_%s=%.3f paired_time_ratio_%s=%.3f",

@@ -226,8 +226,11 @@ int runDepth(const CommandLine& args) {
     clouds.push_back(worldPoints(frames[f], camera));
     origins.push_back(frames[f].T_world_camera.translation());
   }
-  const std::vector<std::size_t> peer_cloud_frames =
-      spreadOver(std::min<int>(peer_frames, static_cast<int>(frames.size())), frames.size());
+  // No clouds for peers that are not compiled in.
+  const int peer_count = bench::compiledPeers().empty()
+                             ? 0
+                             : std::min<int>(peer_frames, static_cast<int>(frames.size()));
+  const std::vector<std::size_t> peer_cloud_frames = spreadOver(peer_count, frames.size());
   std::vector<std::vector<Eigen::Vector3f>> peer_clouds;
   std::vector<Eigen::Vector3d> peer_origins;
   for (std::size_t f : peer_cloud_frames) {

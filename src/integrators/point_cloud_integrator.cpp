@@ -36,18 +36,10 @@ std::uint32_t VoxelUpdateSet::slotOf(const BlockIndex& block) {
 void VoxelUpdateSet::markFreeTowardsEnd(RayTraversal* ray) {
   const int steps = ray->stepsToEnd();
   if (steps == 0) return;
-  constexpr int kShift = VoxelBlock::kSideLog2;
   constexpr int kMask = VoxelBlock::kSide - 1;
-  std::uint64_t* words = nullptr;  // the free mask of the current voxel's block
-  int linear = 0;                  // the current voxel's bit in it
-  const auto enter_block = [&](const VoxelIndex& index) {
-    const BlockIndex block(index.x() >> kShift, index.y() >> kShift, index.z() >> kShift);
-    if (block != last_.block) last_ = {block, slotOf(block)};
-    words = masks_[last_.slot].free.data();
-    linear = VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
-  };
+  int linear = 0;  // the current voxel's bit in `words`, its block's free mask
+  std::uint64_t* words = maskWordsOf(ray->current(), false, &linear);
   const auto set_bit = [&] { words[linear >> 6] |= std::uint64_t{1} << (linear & 63); };
-  enter_block(ray->current());
   set_bit();
   // A step along an axis moves the bit by that axis' stride, unless it leaves the block: then
   // the new voxel's local coordinate on that axis is the first one in the step's direction.
@@ -58,7 +50,7 @@ void VoxelUpdateSet::markFreeTowardsEnd(RayTraversal* ray) {
   ray->walkAxesTowardsEnd(steps - 1, [&](const VoxelIndex& voxel, auto axis) {
     constexpr int a = decltype(axis)::value;
     if ((voxel[a] & kMask) == entry_local[a]) {
-      enter_block(voxel);
+      words = maskWordsOf(voxel, false, &linear);  // a new block
     } else {
       linear += strides[a];
     }

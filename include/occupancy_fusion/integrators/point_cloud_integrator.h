@@ -104,8 +104,8 @@ class VoxelUpdateSet {
   }
   std::uint32_t slotOf(const BlockIndex& block);
 
-  // Returns whether the bit was clear before.
-  bool mark(const VoxelIndex& index, bool occupied) {
+  // The occupied or free mask words of the voxel's block, and the voxel's bit in them.
+  std::uint64_t* maskWordsOf(const VoxelIndex& index, bool occupied, int* linear) {
     // Same block and in-block index as VoxelMap::blockOf / linearIndexInBlock, inlined for the
     // hot loop (arithmetic shift floors negative indices).
     constexpr int kShift = VoxelBlock::kSideLog2;
@@ -114,11 +114,16 @@ class VoxelUpdateSet {
     // Rays walk neighbouring voxels, so most marks hit the block of the previous one, and
     // consecutive rays from one origin pass the same blocks: the table is the last resort.
     if (block != last_.block) last_ = {block, slotOf(block)};
-    const int linear =
-        VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
-    const std::uint64_t bit = std::uint64_t{1} << (linear & 63);
+    *linear = VoxelBlock::linearIndex(index.x() & kMask, index.y() & kMask, index.z() & kMask);
     BlockMasks& masks = masks_[last_.slot];
-    std::uint64_t& word = (occupied ? masks.occupied : masks.free)[linear >> 6];
+    return (occupied ? masks.occupied : masks.free).data();
+  }
+
+  // Returns whether the bit was clear before.
+  bool mark(const VoxelIndex& index, bool occupied) {
+    int linear = 0;
+    std::uint64_t& word = maskWordsOf(index, occupied, &linear)[linear >> 6];
+    const std::uint64_t bit = std::uint64_t{1} << (linear & 63);
     const bool first = (word & bit) == 0;
     word |= bit;
     return first;
