@@ -75,39 +75,29 @@ StereoPoints disparityToPoints(const DisparityImageView& image, const StereoCame
   image.validate();
   camera.validate();
   config.validate();
-  const int step = pixelStep(config.input_resolution);
-  const double focal_baseline = camera.fx * camera.baseline;
-  const double lambda = depthErrorFactor(config.disparity_sigma_px, camera.baseline, camera.fx);
-  const double max_ratio = config.max_depth_sigma_ratio;
+  const DisparityPointConverter converter(camera, config);
+  const int step = converter.step();
+  const std::size_t columns = (image.width + step - 1) / step;
+  const std::size_t expected = columns * ((image.height + step - 1) / step);
   StereoPoints result;
-  const std::size_t expected = static_cast<std::size_t>((image.width + step - 1) / step) *
-                               ((image.height + step - 1) / step);
-  result.points.reserve(expected);
-  result.depth_sigmas.reserve(expected);
+  // Written by index and cut to size at the end: push_back's capacity checks cost as much as the
+  // arithmetic of a point.
+  result.points.resize(expected);
+  result.depth_sigmas.resize(expected);
+  std::size_t kept = 0;
   for (int v = 0; v < image.height; v += step) {
-    const double ray_y = (v - camera.cy) / camera.fy;
+    const double ray_y = converter.rayY(v);
+    const float* row = image.row(v);
     for (int u = 0; u < image.width; u += step) {
-      ++result.pixels_read;
-      const float d = image.at(u, v);
-      if (!(std::isfinite(d) && d > 0 && d >= config.min_disparity_px)) continue;
-      const double z = focal_baseline / d;
-      const double sigma_z = depthSigma(z, lambda);
-      if (max_ratio >= 0 && sigma_z > max_ratio * z) {
-        ++result.dropped_uncertain;
-        continue;
-      }
-      const Eigen::Vector3f point(static_cast<float>(z * (u - camera.cx) / camera.fx),
-                                  static_cast<float>(z * ray_y), static_cast<float>(z));
-      // A disparity near 0 or an absurd focal length or baseline can put the point beyond float
-      // range or round its depth to 0: the ray caster could not walk to it.
-      if (!point.allFinite() || !(point.z() > 0.0f) ||
-          !std::isfinite(static_cast<float>(sigma_z))) {
-        continue;
-      }
-      result.points.push_back(point);
-      result.depth_sigmas.push_back(static_cast<float>(sigma_z));
+      const auto converted =
+          converter.convert(u, ray_y, row[u], &result.points[kept], &result.depth_sigmas[kept]);
+      if (converted == DisparityPointConverter::Result::kPoint) ++kept;
+      if (converted == DisparityPointConverter::Result::kUncertain) ++result.dropped_uncertain;
     }
   }
+  result.pixels_read = expected;
+  result.points.resize(kept);
+  result.depth_sigmas.resize(kept);
   return result;
 }
 

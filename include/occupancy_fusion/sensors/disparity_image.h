@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -48,8 +49,9 @@ struct DisparityImageView {
   const float* disparity = nullptr;  // disparity[v * row_stride + u]
   int row_stride = 0;                // floats per row; 0 means width
 
-  float at(int u, int v) const {
-    return disparity[static_cast<std::size_t>(v) * (row_stride > 0 ? row_stride : width) + u];
+  float at(int u, int v) const { return row(v)[u]; }
+  const float* row(int v) const {
+    return disparity + static_cast<std::size_t>(v) * (row_stride > 0 ? row_stride : width);
   }
   void validate() const;  // throws std::invalid_argument unless non-null with positive size
 };
@@ -103,6 +105,47 @@ struct StereoPoints {
       0;  // valid disparities dropped: sigma_z / z > max_depth_sigma_ratio
 
   std::size_t size() const { return points.size(); }
+};
+
+// disparityToPoints' rule for one pixel, for callers that convert rows themselves (on several
+// threads, or straight into the map frame). Inline: it runs once per pixel.
+class DisparityPointConverter {
+ public:
+  enum class Result { kPoint, kNoMatch, kUncertain };  // kUncertain: sigma_z / z too large
+
+  DisparityPointConverter(const StereoCamera& camera, const DisparityConversionConfig& config)
+      : camera_(camera),
+        focal_baseline_(camera.fx * camera.baseline),
+        lambda_(depthErrorFactor(config.disparity_sigma_px, camera.baseline, camera.fx)),
+        max_ratio_(config.max_depth_sigma_ratio),
+        min_disparity_(config.min_disparity_px),
+        step_(pixelStep(config.input_resolution)) {}
+
+  int step() const { return step_; }  // pixels between the converted ones, in rows and columns
+  double rayY(int v) const { return (v - camera_.cy) / camera_.fy; }  // of row v, for convert()
+
+  // Pixel (u, v) of disparity d, with ray_y = rayY(v): its point in the camera's optical frame and
+  // sigma_z when the result is kPoint.
+  Result convert(int u, double ray_y, float d, Eigen::Vector3f* point, float* sigma_z) const {
+    if (!(std::isfinite(d) && d > 0 && d >= min_disparity_)) return Result::kNoMatch;
+    const double z = focal_baseline_ / d;
+    const double sigma = depthSigma(z, lambda_);
+    if (max_ratio_ >= 0 && sigma > max_ratio_ * z) return Result::kUncertain;
+    *point = Eigen::Vector3f(static_cast<float>(z * (u - camera_.cx) / camera_.fx),
+                             static_cast<float>(z * ray_y), static_cast<float>(z));
+    *sigma_z = static_cast<float>(sigma);
+    // A disparity near 0 or an absurd focal length or baseline can put the point beyond float
+    // range or round its depth to 0: the ray caster could not walk to it.
+    if (!point->allFinite() || !(point->z() > 0.0f) || !std::isfinite(*sigma_z)) {
+      return Result::kNoMatch;
+    }
+    return Result::kPoint;
+  }
+
+ private:
+  StereoCamera camera_;
+  double focal_baseline_, lambda_, max_ratio_, min_disparity_;
+  int step_;
 };
 
 // Converts the valid pixels (finite d > max(0, min_disparity_px)) whose sigma_z / z is within

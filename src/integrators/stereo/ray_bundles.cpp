@@ -13,48 +13,20 @@ namespace occupancy_fusion {
 
 namespace {
 
-bool isUsable(const Eigen::Vector3d& point, const Eigen::Vector3d& origin, double resolution,
-              bool needs_direction) {
-  if (!point.allFinite()) return false;
-  const double range = (point - origin).norm();
-  if (needs_direction && !(range > 0)) return false;  // the walk past the point needs a direction
-  // Keys hold 2^20 voxels each way; the walk may continue a few sigma past the
-  // point.
-  const double limit = 0.5 * kMaxKeyCoordinate3D * resolution;
-  return ((point - origin).array().abs() < limit).all();
-}
-
-// Per point: the key of its end voxel and its squared range, or kUnusableRay. Independent per
-// point, so computed on every thread before the (sequential) grouping.
-constexpr std::uint64_t kUnusableRay = ~std::uint64_t{0};  // packKey uses 63 bits
 constexpr std::size_t kParallelPoints = 8192;
-
-struct EndVoxel {
-  std::uint64_t key;
-  double squared_range;
-};
-
-std::vector<EndVoxel> endVoxels(const std::vector<Eigen::Vector3f>& points,
-                                const std::vector<float>& sigmas, const Eigen::Vector3d& origin,
-                                double resolution, bool needs_direction) {
-  std::vector<EndVoxel> ends(points.size());
-  const long count = static_cast<long>(points.size());
-#pragma omp parallel for schedule(static) if (points.size() >= kParallelPoints)
-  for (long i = 0; i < count; ++i) {
-    const Eigen::Vector3d point = points[i].cast<double>();
-    ends[i] =
-        isUsableRay(point, sigmas[i], origin, resolution, needs_direction)
-            ? EndVoxel{packKey(voxelIndexOf(point, resolution)), (point - origin).squaredNorm()}
-            : EndVoxel{kUnusableRay, 0.0};
-  }
-  return ends;
-}
 
 }  // namespace
 
-bool isUsableRay(const Eigen::Vector3d& point, float sigma, const Eigen::Vector3d& origin,
-                 double resolution, bool needs_direction) {
-  return isUsable(point, origin, resolution, needs_direction) && std::isfinite(sigma) && sigma >= 0;
+std::vector<RayTarget> rayTargetsOf(const std::vector<Eigen::Vector3f>& points,
+                                    const std::vector<float>& sigmas, const Eigen::Vector3d& origin,
+                                    double resolution, bool needs_direction) {
+  std::vector<RayTarget> ends(points.size());
+  const long count = static_cast<long>(points.size());
+#pragma omp parallel for schedule(static) if (points.size() >= kParallelPoints)
+  for (long i = 0; i < count; ++i) {
+    ends[i] = rayTargetOf(points[i], sigmas[i], origin, resolution, needs_direction);
+  }
+  return ends;
 }
 
 namespace {
@@ -72,17 +44,17 @@ struct Bundles {
   std::size_t skipped = 0;
 };
 
-void groupByEndVoxel(const std::vector<EndVoxel>& ends, std::uint32_t first, std::uint32_t last,
+void groupByEndVoxel(const std::vector<RayTarget>& ends, std::uint32_t first, std::uint32_t last,
                      Bundles* out) {
   // Room for a bundle per eight points up front: growing the table rehashes every entry again.
   out->of_voxel.reserve((last - first) / 8);
   out->list.reserve((last - first) / 8);
-  std::uint64_t last_key = kUnusableRay;
+  std::uint64_t last_key = RayTarget::kUnusable;
   Bundle* bundle = nullptr;
   for (std::uint32_t i = first; i < last; ++i) {
     const auto [key, squared_range] = ends[i];
-    if (key == kUnusableRay) {
-      ++out->skipped;
+    if (key >= RayTarget::kNoPoint) {
+      if (key == RayTarget::kUnusable) ++out->skipped;
       continue;
     }
     if (key != last_key) {
@@ -128,12 +100,9 @@ void appendLater(const Bundles& later, Bundles* bundles) {
 
 }  // namespace
 
-std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<Eigen::Vector3f>& points,
-                                                const std::vector<float>& sigmas,
-                                                const Eigen::Vector3d& origin, double resolution,
+std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
                                                 bool visibility_mode, std::size_t* skipped) {
-  const bool needs_direction = visibility_mode, needs_depth = visibility_mode;
-  const std::vector<EndVoxel> ends = endVoxels(points, sigmas, origin, resolution, needs_direction);
+  const bool needs_depth = visibility_mode;
   // Consecutive parts of the points grouped on every thread, then joined in order: the same
   // bundles, in the same order, as one pass (and as on one thread).
   const int parts = ends.size() >= kParallelPoints ? std::max(1, omp_get_max_threads()) : 1;

@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "frame_rays.h"
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "ray_bundles.h"
@@ -481,9 +482,18 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   if (range_sigmas.size() != points_in_map.size()) {
     throw std::invalid_argument("range_sigmas must have one entry per point");
   }
+  return computeUpdates(points_in_map, range_sigmas, nullptr, points_in_map.size(), sensor_origin,
+                        map, updates, surface);
+}
+
+StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
+    const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
+    const std::vector<RayTarget>* given_ends, std::size_t point_count,
+    const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
+    std::vector<StereoVoxelUpdate>* updates, const MeasuredSurface* surface) const {
   updates->clear();
   StereoIntegrationStats stats;
-  stats.points = points_in_map.size();
+  stats.points = point_count;
   if (!map.isInRange(sensor_origin)) {
     stats.skipped_points = stats.points;
     return stats;
@@ -514,10 +524,15 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   std::size_t skipped = 0;
   std::vector<std::uint32_t> bundles;
   if (config_.bundle_rays) {
-    bundles = bundleRaysByEndVoxel(points_in_map, range_sigmas, sensor_origin, resolution,
-                                   visibility_mode, &skipped);
+    if (given_ends != nullptr) {
+      bundles = bundleRaysByEndVoxel(*given_ends, visibility_mode, &skipped);
+    } else {
+      const std::vector<RayTarget> ends =
+          rayTargetsOf(points_in_map, range_sigmas, sensor_origin, resolution, visibility_mode);
+      bundles = bundleRaysByEndVoxel(ends, visibility_mode, &skipped);
+    }
   }
-  // Without bundling every point is a ray; its usability is checked in the parallel loop.
+  // Without bundling every slot is a ray; its usability is checked in the parallel loop.
   const int count = static_cast<int>(config_.bundle_rays ? bundles.size() : points_in_map.size());
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
   const int chunk = std::clamp(count / (8 * threads), 64, 512);
@@ -540,10 +555,16 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
       const std::uint32_t i = config_.bundle_rays ? bundles[ray] : static_cast<std::uint32_t>(ray);
       Eigen::Vector3d point = points_in_map[i].cast<double>();
       const float sigma = range_sigmas[i];
-      if (!config_.bundle_rays &&
-          !isUsableRay(point, sigma, sensor_origin, resolution, visibility_mode)) {
-        ++skipped;
-        continue;
+      if (!config_.bundle_rays) {
+        const RayTarget end =
+            given_ends != nullptr
+                ? (*given_ends)[i]
+                : rayTargetOf(points_in_map[i], sigma, sensor_origin, resolution, visibility_mode);
+        if (!end.isPoint()) continue;
+        if (!end.isUsable()) {
+          ++skipped;
+          continue;
+        }
       }
       // discretize = true: OctoMap's bundled ray ends at the end voxel's centre.
       if (config_.bundle_rays && !visibility_mode) {
@@ -565,7 +586,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     applyMeasurement(map, measurement, config_, threads, updates);
   }
   stats.skipped_points = skipped;
-  stats.rays = config_.bundle_rays ? bundles.size() : stats.points - skipped;
+  stats.rays = config_.bundle_rays ? bundles.size() : point_count - skipped;
   stats.merged_points = stats.points - skipped - stats.rays;
   stats.voxel_visits = visits;
   stats.cache_hits = hits;
@@ -675,27 +696,35 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
                                                              const Eigen::Isometry3d& T_map_camera,
                                                              VoxelMap* map) const {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<Eigen::Vector3f> points;
-  std::vector<float> sigmas;
-  std::size_t dropped_uncertain = 0;
+  // Kept from frame to frame on each calling thread: allocating and zeroing a full image's slots
+  // (32 bytes a pixel) anew cost as much as converting them.
+  thread_local FrameRays kept_rays;
+  FrameRays& rays = kept_rays;  // this thread's, whichever threads run the conversion's tasks
   MeasuredSurface surface;
   // Bad input throws here: an exception must not leave an OpenMP region.
   disparity.validate();
   camera.validate();
-  // The conversion is one task beside the measured surface's rows, so that both threads stay busy
-  // (the conversion alone is sequential).
+  const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
+  // The pixels' rows, then the measured surface's rows, as tasks of one team: both threads work
+  // on both, with one region's start-up. (The conversion as one task beside the surface's rows
+  // would leave its own row tasks to one thread: a thread waiting for its children does not take
+  // their children.)
 #pragma omp parallel
 #pragma omp single
   {
-#pragma omp task default(shared)
-    disparityToMapPoints(disparity, camera, T_map_camera, &points, &sigmas, nullptr,
-                         &dropped_uncertain);
+    convertFrameRays(disparity, camera, config_.disparity, T_map_camera, map->resolution(),
+                     visibility_mode, &rays);
     surface = measuredSurface(disparity, camera, T_map_camera, map->resolution());
-#pragma omp taskwait
   }
+  std::vector<StereoVoxelUpdate> updates;
   StereoIntegrationStats stats =
-      integrate(points, sigmas, T_map_camera.translation(), map, &surface);
-  stats.dropped_uncertain = dropped_uncertain;
+      computeUpdates(rays.points, rays.range_sigmas, &rays.ends, rays.points_count,
+                     T_map_camera.translation(), *map, &updates, &surface);
+  if (!updates.empty()) {
+    map->setFocus(T_map_camera.translation());
+    apply(updates, map);
+  }
+  stats.dropped_uncertain = rays.dropped_uncertain;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }

@@ -10,6 +10,7 @@
 #include <optional>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -608,6 +609,79 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointForm) {
   from_points.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
     EXPECT_EQ(from_image.logOdds(index), std::optional<float>(value));
   });
+}
+
+// The disparity image's path converts, moves to the map frame and keys the pixels in one pass on
+// every thread, with a slot per pixel; the point form gets disparityToMapPoints' compact list.
+// Both must give the same rays: the same map bit for bit and the same counts, at every input
+// resolution, bundled or not, on one thread or two. The image is a tilted plane with holes,
+// near-zero disparities (dropped as uncertain) and a patch of wrong disparity.
+TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPath) {
+  constexpr int kWidth = 96, kHeight = 72;
+  std::vector<float> disparity(kWidth * kHeight);
+  std::mt19937 random(3);
+  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      float d = 30.0f + 0.2f * u - 0.1f * v + 0.3f * (uniform(random) - 0.5f);
+      const float roll = uniform(random);
+      if (roll < 0.1f) d = std::nanf("");
+      if (roll >= 0.1f && roll < 0.13f) d = 0.002f;  // sigma_z / z = 250: dropped
+      if (u >= 40 && u < 52 && v >= 20 && v < 32) d += 6.0f;  // a patch shifted towards the camera
+      disparity[v * kWidth + u] = d;
+    }
+  }
+  const DisparityImageView view{kWidth, kHeight, disparity.data(), 0};
+  const StereoCamera camera{80.0, 80.0, 48.0, 36.0, 0.12};
+  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
+  T_map_camera.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1.0, 0.1).normalized())
+                              .toRotationMatrix() *
+                          (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished();
+  T_map_camera.translation() = Eigen::Vector3d(0.31, -0.47, 1.13);
+  const int threads_before = omp_get_max_threads();
+  for (const InputResolution input :
+       {InputResolution::kFull, InputResolution::kHalf, InputResolution::kQuarter}) {
+    for (const bool bundle : {true, false}) {
+      for (const int threads : {1, 2}) {
+        SCOPED_TRACE(toString(input) + (bundle ? " bundled" : " per ray") + " threads " +
+                     std::to_string(threads));
+        omp_set_num_threads(threads);
+        VisibilityStereoConfig config = visibilityStereoConfigFor(StereoParameterSet::kMeasured);
+        config.disparity.input_resolution = input;
+        config.bundle_rays = bundle;
+        const VisibilityStereoIntegrator integrator(config);
+        VoxelMap from_image(mapConfig()), from_points(mapConfig());
+        std::vector<Eigen::Vector3f> points;
+        std::vector<float> sigmas;
+        std::size_t dropped = 0;
+        integrator.disparityToMapPoints(view, camera, T_map_camera, &points, &sigmas, nullptr,
+                                        &dropped);
+        ASSERT_GT(dropped, 0u);
+        // Two frames: the second reads the first's map.
+        for (int frame = 0; frame < 2; ++frame) {
+          const StereoIntegrationStats image_stats =
+              integrator.integrate(view, camera, T_map_camera, &from_image);
+          const MeasuredSurface surface =
+              integrator.measuredSurface(view, camera, T_map_camera, kRes);
+          const StereoIntegrationStats point_stats = integrator.integrate(
+              points, sigmas, T_map_camera.translation(), &from_points, &surface);
+          EXPECT_EQ(image_stats.points, points.size());
+          EXPECT_EQ(image_stats.points, point_stats.points);
+          EXPECT_EQ(image_stats.skipped_points, point_stats.skipped_points);
+          EXPECT_EQ(image_stats.dropped_uncertain, dropped);
+          EXPECT_EQ(image_stats.rays, point_stats.rays);
+          EXPECT_EQ(image_stats.voxel_visits, point_stats.voxel_visits);
+          EXPECT_EQ(image_stats.updated_voxels, point_stats.updated_voxels);
+        }
+        EXPECT_GT(from_points.knownVoxelCount(), 20u);
+        EXPECT_EQ(from_image.knownVoxelCount(), from_points.knownVoxelCount());
+        from_points.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+          EXPECT_EQ(from_image.logOdds(index), std::optional<float>(value));
+        });
+      }
+    }
+  }
+  omp_set_num_threads(threads_before);
 }
 
 // A near-zero disparity among good ones (a match lost in noise): z = 20 km with sigma_z = 1e7 m,

@@ -21,6 +21,8 @@
 
 namespace occupancy_fusion {
 
+struct RayTarget;  // a point's end voxel (internal)
+
 // Phi, the standard normal CDF, tabulated with linear interpolation (Sec. III-D
 // pre-computes P(I_v) = Phi((z_q - z) / sigma_z) over depth and distance; with
 // sigma_z folded into the argument the same table needs one dimension). Outside
@@ -131,6 +133,15 @@ class VisibilityStereoIntegrator {
                                   double voxel_size_m = 0.0) const;
 
  private:
+  // computeUpdates() over slots of points with their end voxels given (one per slot; a slot
+  // without a point is passed over), or computed here where `ends` is null.
+  StereoIntegrationStats computeUpdates(const std::vector<Eigen::Vector3f>& points_in_map,
+                                        const std::vector<float>& range_sigmas,
+                                        const std::vector<RayTarget>* ends, std::size_t point_count,
+                                        const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
+                                        std::vector<StereoVoxelUpdate>* updates,
+                                        const MeasuredSurface* surface) const;
+
   VisibilityStereoConfig config_;
   NormalCdfTable phi_;
 };

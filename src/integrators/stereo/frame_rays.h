@@ -1,0 +1,33 @@
+// A disparity frame's rays in the map frame: its points, their range sigmas and end voxels,
+// computed in one pass per pixel on every thread. Internal to the stereo integrator.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <vector>
+
+#include "occupancy_fusion/sensors/disparity_image.h"
+#include "ray_bundles.h"
+
+namespace occupancy_fusion {
+
+// One slot per pixel read (at the input resolution), in pixel order, so that rows converted on
+// different threads are not joined: ends[i].isPoint() is false where the pixel gave no point.
+struct FrameRays {
+  std::vector<Eigen::Vector3f> points;  // map frame
+  std::vector<float> range_sigmas;      // m, sigma_z scaled by range / z
+  std::vector<RayTarget> ends;          // rayTargetOf each point
+  std::size_t points_count = 0;         // slots with a point
+  std::size_t dropped_uncertain = 0;    // valid disparities dropped for sigma_z / z
+};
+
+// disparityToPoints' points, moved to the map frame as VisibilityStereoIntegrator's
+// disparityToMapPoints does, with their end voxels seen from the camera's origin. Inside a
+// parallel region the rows are tasks of the enclosing team (beside other work of the frame, such
+// as the measured surface's rows); outside one they run on this thread.
+void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& camera,
+                      const DisparityConversionConfig& conversion,
+                      const Eigen::Isometry3d& T_map_camera, double resolution,
+                      bool needs_direction, FrameRays* rays);
+
+}  // namespace occupancy_fusion
