@@ -471,9 +471,11 @@ void applyMeasurement(const VoxelMap& map, const FrameMeasurement& measurement,
 // VisibilityStereoIntegrator
 
 VisibilityStereoIntegrator::VisibilityStereoIntegrator(const VisibilityStereoConfig& config)
-    : config_(config) {
+    : config_(config), frame_rays_(std::make_unique<FrameRays>()) {
   config_.validate();
 }
+
+VisibilityStereoIntegrator::~VisibilityStereoIntegrator() = default;
 
 StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
@@ -696,10 +698,9 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
                                                              const Eigen::Isometry3d& T_map_camera,
                                                              VoxelMap* map) const {
   const auto start = std::chrono::steady_clock::now();
-  // Kept from frame to frame on each calling thread: allocating and zeroing a full image's slots
-  // (32 bytes a pixel) anew cost as much as converting them.
-  thread_local FrameRays kept_rays;
-  FrameRays& rays = kept_rays;  // this thread's, whichever threads run the conversion's tasks
+  const std::unique_lock<std::mutex> kept(frame_rays_mutex_, std::try_to_lock);
+  FrameRays own_rays;
+  FrameRays& rays = kept.owns_lock() ? *frame_rays_ : own_rays;
   MeasuredSurface surface;
   // Bad input throws here: an exception must not leave an OpenMP region.
   disparity.validate();

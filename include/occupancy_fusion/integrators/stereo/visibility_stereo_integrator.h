@@ -11,6 +11,8 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -22,6 +24,7 @@
 namespace occupancy_fusion {
 
 struct RayTarget;  // a point's end voxel (internal)
+struct FrameRays;  // a disparity frame's rays (internal)
 
 // Phi, the standard normal CDF, tabulated with linear interpolation (Sec. III-D
 // pre-computes P(I_v) = Phi((z_q - z) / sigma_z) over depth and distance; with
@@ -92,6 +95,7 @@ struct StereoIntegrationStats {
 class VisibilityStereoIntegrator {
  public:
   explicit VisibilityStereoIntegrator(const VisibilityStereoConfig& config = {});  // validates
+  ~VisibilityStereoIntegrator();
 
   const VisibilityStereoConfig& config() const { return config_; }
 
@@ -144,6 +148,11 @@ class VisibilityStereoIntegrator {
 
   VisibilityStereoConfig config_;
   NormalCdfTable phi_;
+  // The slots of a disparity frame's rays, kept for the next frame: allocating and zeroing a
+  // full image's slots (32 bytes a pixel) anew cost as much as filling them. A call made while
+  // another one holds them uses slots of its own.
+  mutable std::mutex frame_rays_mutex_;
+  std::unique_ptr<FrameRays> frame_rays_;
 };
 
 }  // namespace occupancy_fusion
