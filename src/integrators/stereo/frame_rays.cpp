@@ -38,7 +38,8 @@ void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& c
       Eigen::Vector3f p;
       float sigma_z = 0.0f;
       RayTarget& end = rays->ends[first + i];
-      const auto converted = converter.convert(i * step, ray_y, row[i * step], &p, &sigma_z);
+      const int u = i * step;
+      const auto converted = converter.convert(u, ray_y, row[u], &p, &sigma_z);
       if (converted != DisparityPointConverter::Result::kPoint) {
         end.key = RayTarget::kNoPoint;
         if (converted == DisparityPointConverter::Result::kUncertain) ++counts[j].dropped_uncertain;
