@@ -11,6 +11,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -682,6 +683,46 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPat
     }
   }
   omp_set_num_threads(threads_before);
+}
+
+// One integrator shared by threads (its const members may run concurrently): the call that finds
+// the kept ray slots taken uses slots of its own, and every map is the map of a call made alone.
+TEST(VisibilityStereoIntegratorTest, ConcurrentDisparityFramesGiveTheMapsOfSequentialOnes) {
+  constexpr int kWidth = 64, kHeight = 48, kThreads = 4, kFrames = 5;
+  const StereoCamera camera{60.0, 60.0, 32.0, 24.0, 0.12};
+  std::vector<std::vector<float>> images(kThreads, std::vector<float>(kWidth * kHeight));
+  for (int t = 0; t < kThreads; ++t) {
+    for (int v = 0; v < kHeight; ++v) {
+      for (int u = 0; u < kWidth; ++u) images[t][v * kWidth + u] = 8.0f + 0.05f * u + 0.5f * t;
+    }
+  }
+  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
+  T_map_camera.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  T_map_camera.translation() = kOrigin;
+  const VisibilityStereoIntegrator integrator(
+      visibilityStereoConfigFor(StereoParameterSet::kMeasured));
+  auto mapOf = [&](int t, VoxelMap* map) {
+    const DisparityImageView view{kWidth, kHeight, images[t].data(), 0};
+    for (int frame = 0; frame < kFrames; ++frame) {
+      integrator.integrate(view, camera, T_map_camera, map);
+    }
+  };
+  std::vector<std::unique_ptr<VoxelMap>> alone, together;
+  for (int t = 0; t < kThreads; ++t) {
+    alone.push_back(std::make_unique<VoxelMap>(mapConfig()));
+    together.push_back(std::make_unique<VoxelMap>(mapConfig()));
+    mapOf(t, alone.back().get());
+  }
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) threads.emplace_back(mapOf, t, together[t].get());
+  for (std::thread& thread : threads) thread.join();
+  for (int t = 0; t < kThreads; ++t) {
+    EXPECT_GT(alone[t]->knownVoxelCount(), 20u);
+    EXPECT_EQ(together[t]->knownVoxelCount(), alone[t]->knownVoxelCount());
+    alone[t]->forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+      EXPECT_EQ(together[t]->logOdds(index), std::optional<float>(value));
+    });
+  }
 }
 
 // A near-zero disparity among good ones (a match lost in noise): z = 20 km with sigma_z = 1e7 m,
