@@ -627,7 +627,7 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPat
       float d = 30.0f + 0.2f * u - 0.1f * v + 0.3f * (uniform(random) - 0.5f);
       const float roll = uniform(random);
       if (roll < 0.1f) d = std::nanf("");
-      if (roll >= 0.1f && roll < 0.13f) d = 0.002f;  // sigma_z / z = 250: dropped
+      if (roll >= 0.1f && roll < 0.13f) d = 0.002f;           // sigma_z / z = 250: dropped
       if (u >= 40 && u < 52 && v >= 20 && v < 32) d += 6.0f;  // a patch shifted towards the camera
       disparity[v * kWidth + u] = d;
     }
@@ -635,9 +635,9 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPat
   const DisparityImageView view{kWidth, kHeight, disparity.data(), 0};
   const StereoCamera camera{80.0, 80.0, 48.0, 36.0, 0.12};
   Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
-  T_map_camera.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1.0, 0.1).normalized())
-                              .toRotationMatrix() *
-                          (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished();
+  T_map_camera.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix() *
+      (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished();
   T_map_camera.translation() = Eigen::Vector3d(0.31, -0.47, 1.13);
   const int threads_before = omp_get_max_threads();
   for (const InputResolution input :
