@@ -1,7 +1,5 @@
 #include "frame_rays.h"
 
-#include <algorithm>
-
 namespace occupancy_fusion {
 
 namespace {
@@ -47,8 +45,7 @@ void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& c
       }
       ++counts[j].points;
       const Eigen::Vector3f point = transform * p;
-      // sigma_z is along the optical axis; along the ray it grows by range / z.
-      const float range_sigma = sigma_z * p.norm() / p.z();
+      const float range_sigma = rangeSigmaOf(p, sigma_z);
       rays->points[first + i] = point;
       rays->range_sigmas[first + i] = range_sigma;
       end = rayTargetOf(point, range_sigma, origin, resolution, needs_direction);

@@ -21,6 +21,12 @@ struct FrameRays {
   std::size_t dropped_uncertain = 0;    // valid disparities dropped for sigma_z / z
 };
 
+// The standard deviation along the ray of a camera point with depth standard deviation sigma_z:
+// sigma_z is along the optical axis; along the ray it grows by range / z.
+inline float rangeSigmaOf(const Eigen::Vector3f& camera_point, float sigma_z) {
+  return sigma_z * camera_point.norm() / camera_point.z();
+}
+
 // disparityToPoints' points, moved to the map frame as VisibilityStereoIntegrator's
 // disparityToMapPoints does, with their end voxels seen from the camera's origin. Inside a
 // parallel region the rows are tasks of the enclosing team (beside other work of the frame, such

@@ -637,14 +637,26 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
     const Eigen::Vector3d& sensor_origin, VoxelMap* map, const MeasuredSurface* surface) const {
   const auto start = std::chrono::steady_clock::now();
+  if (range_sigmas.size() != points_in_map.size()) {
+    throw std::invalid_argument("range_sigmas must have one entry per point");
+  }
+  StereoIntegrationStats stats = integrateRays(points_in_map, range_sigmas, nullptr,
+                                               points_in_map.size(), sensor_origin, map, surface);
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+StereoIntegrationStats VisibilityStereoIntegrator::integrateRays(
+    const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
+    const std::vector<RayTarget>* ends, std::size_t point_count,
+    const Eigen::Vector3d& sensor_origin, VoxelMap* map, const MeasuredSurface* surface) const {
   std::vector<StereoVoxelUpdate> updates;
-  StereoIntegrationStats stats =
-      computeUpdates(points_in_map, range_sigmas, sensor_origin, *map, &updates, surface);
+  const StereoIntegrationStats stats = computeUpdates(
+      points_in_map, range_sigmas, ends, point_count, sensor_origin, *map, &updates, surface);
   if (!updates.empty()) {
     map->setFocus(sensor_origin);
     apply(updates, map);
   }
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
 
@@ -662,8 +674,7 @@ void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& 
   for (std::size_t i = 0; i < camera_points.size(); ++i) {
     const Eigen::Vector3f& p = camera_points.points[i];
     (*points_in_map)[i] = transform * p;
-    // sigma_z is along the optical axis; along the ray it grows by range / z.
-    (*range_sigmas)[i] = camera_points.depth_sigmas[i] * p.norm() / p.z();
+    (*range_sigmas)[i] = rangeSigmaOf(p, camera_points.depth_sigmas[i]);
   }
   if (pixels_read != nullptr) *pixels_read = camera_points.pixels_read;
   if (dropped_uncertain != nullptr) *dropped_uncertain = camera_points.dropped_uncertain;
@@ -717,14 +728,9 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
                      visibility_mode, &rays);
     surface = measuredSurface(disparity, camera, T_map_camera, map->resolution());
   }
-  std::vector<StereoVoxelUpdate> updates;
   StereoIntegrationStats stats =
-      computeUpdates(rays.points, rays.range_sigmas, &rays.ends, rays.points_count,
-                     T_map_camera.translation(), *map, &updates, &surface);
-  if (!updates.empty()) {
-    map->setFocus(T_map_camera.translation());
-    apply(updates, map);
-  }
+      integrateRays(rays.points, rays.range_sigmas, &rays.ends, rays.points_count,
+                    T_map_camera.translation(), map, &surface);
   stats.dropped_uncertain = rays.dropped_uncertain;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;

@@ -145,6 +145,12 @@ class VisibilityStereoIntegrator {
                                         const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
                                         std::vector<StereoVoxelUpdate>* updates,
                                         const MeasuredSurface* surface) const;
+  // That computeUpdates(), then apply(): integrate() without its timing.
+  StereoIntegrationStats integrateRays(const std::vector<Eigen::Vector3f>& points_in_map,
+                                       const std::vector<float>& range_sigmas,
+                                       const std::vector<RayTarget>* ends, std::size_t point_count,
+                                       const Eigen::Vector3d& sensor_origin, VoxelMap* map,
+                                       const MeasuredSurface* surface) const;
 
   VisibilityStereoConfig config_;
   NormalCdfTable phi_;
