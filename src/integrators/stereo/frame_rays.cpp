@@ -1,5 +1,7 @@
 #include "frame_rays.h"
 
+#include <functional>
+
 namespace occupancy_fusion {
 
 namespace {
@@ -13,7 +15,8 @@ struct RowCounts {
 void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& camera,
                       const DisparityConversionConfig& conversion,
                       const Eigen::Isometry3d& T_map_camera, double resolution,
-                      bool needs_direction, FrameRays* rays) {
+                      bool needs_direction, FrameRays* rays,
+                      const std::function<void()>& alongside) {
   const DisparityPointConverter converter(camera, conversion);
   const int step = converter.step();
   const int columns = (disparity.width + step - 1) / step;
@@ -26,7 +29,8 @@ void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& c
   const Eigen::Vector3d origin = T_map_camera.translation();
   std::vector<RowCounts> counts(rows);
   // Eight rows a task: a few dozen tasks for a whole image, each long against a task's overhead.
-#pragma omp taskloop grainsize(8) default(shared)
+  // Without a task group: this thread goes on to `alongside` while the rows wait for a thread.
+#pragma omp taskloop grainsize(8) default(shared) nogroup
   for (int j = 0; j < rows; ++j) {
     const int v = j * step;
     const double ray_y = converter.rayY(v);
@@ -51,6 +55,8 @@ void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& c
       end = rayTargetOf(point, range_sigma, origin, resolution, needs_direction);
     }
   }
+  if (alongside) alongside();
+#pragma omp taskwait
   rays->points_count = rays->dropped_uncertain = 0;
   for (const RowCounts& row : counts) {
     rays->points_count += row.points;

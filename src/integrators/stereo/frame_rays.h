@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "occupancy_fusion/sensors/disparity_image.h"
@@ -29,11 +30,13 @@ inline float rangeSigmaOf(const Eigen::Vector3f& camera_point, float sigma_z) {
 
 // disparityToPoints' points, moved to the map frame as VisibilityStereoIntegrator's
 // disparityToMapPoints does, with their end voxels seen from the camera's origin. Inside a
-// parallel region the rows are tasks of the enclosing team (beside other work of the frame, such
-// as the measured surface's rows); outside one they run on this thread.
+// parallel region the rows are tasks of the enclosing team, and this thread runs `alongside` (other
+// work of the frame, such as the measured surface, whose serial parts then overlap the rows)
+// before it waits for them; outside one everything runs on this thread.
 void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& camera,
                       const DisparityConversionConfig& conversion,
                       const Eigen::Isometry3d& T_map_camera, double resolution,
-                      bool needs_direction, FrameRays* rays);
+                      bool needs_direction, FrameRays* rays,
+                      const std::function<void()>& alongside = {});
 
 }  // namespace occupancy_fusion

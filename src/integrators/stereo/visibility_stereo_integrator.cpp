@@ -717,16 +717,18 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
   disparity.validate();
   camera.validate();
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
-  // The pixels' rows, then the measured surface's rows, as tasks of one team: both threads work
-  // on both, with one region's start-up. (The conversion as one task beside the surface's rows
-  // would leave its own row tasks to one thread: a thread waiting for its children does not take
-  // their children.)
+  // The pixels' rows and the measured surface's rows as tasks of one team: both threads work on
+  // both, with one region's start-up, and the surface's serial parts (its grid step, its sample
+  // lattice) run while the other thread converts rows. (The conversion as one task beside the
+  // surface's rows would leave its own row tasks to one thread: a thread waiting for its children
+  // does not take their children.)
 #pragma omp parallel
 #pragma omp single
   {
-    convertFrameRays(disparity, camera, config_.disparity, T_map_camera, map->resolution(),
-                     visibility_mode, &rays);
-    surface = measuredSurface(disparity, camera, T_map_camera, map->resolution());
+    convertFrameRays(
+        disparity, camera, config_.disparity, T_map_camera, map->resolution(), visibility_mode,
+        &rays,
+        [&] { surface = measuredSurface(disparity, camera, T_map_camera, map->resolution()); });
   }
   StereoIntegrationStats stats =
       integrateRays(rays.points, rays.range_sigmas, &rays.ends, rays.points_count,
