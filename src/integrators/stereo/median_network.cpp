@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -49,7 +50,22 @@ std::vector<std::pair<int, int>> prunedTo(const std::vector<std::pair<int, int>>
 
 }  // namespace
 
-MedianNetwork::MedianNetwork(int slots) : slots_(slots), middle_(slots / 2) {
+namespace {
+
+bool hasAvx2() {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+}  // namespace
+
+MedianNetwork::MedianNetwork(int slots, Instructions instructions)
+    : slots_(slots),
+      middle_(slots / 2),
+      use_octets_(instructions == Instructions::kWidest && hasAvx2()) {
   if (slots < 1 || slots > kMaxSlots) {
     throw std::invalid_argument("MedianNetwork: slots must be in [1, " + std::to_string(kMaxSlots) +
                                 "], got " + std::to_string(slots));
@@ -59,55 +75,83 @@ MedianNetwork::MedianNetwork(int slots) : slots_(slots), middle_(slots / 2) {
 
 namespace {
 
-constexpr int kQuads = MedianNetwork::kLanes / 4;
-static_assert(MedianNetwork::kLanes % 4 == 0, "lanes come in quads");
+using FloatOctet = float __attribute__((vector_size(8 * sizeof(float))));
+static_assert(MedianNetwork::kLanes == 8, "one octet or two quads hold the lanes");
 
-FloatQuad load(const MedianNetwork::Lanes& lanes, int quad) {
-  return loadQuad(lanes.data() + 4 * quad);
+// The network on the lanes as kLanes / Width vectors of Width floats (Vector), the same
+// operations on every lane whatever the width, so that both widths give the same bits. Inlined
+// into each caller so that the vectors take the caller's instruction set.
+template <typename Vector, int Width>
+inline __attribute__((always_inline)) void runNetwork(
+    const std::vector<std::pair<int, int>>& exchanges, int slots, int middle,
+    MedianNetwork::Lanes* values, int* counts, float* medians) {
+  constexpr int kParts = MedianNetwork::kLanes / Width;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  // A set of n values whose missing ones become middle - n / 2 times -inf and the rest +inf has
+  // its upper median on the middle wire: -inf ... v_0 .. v_n-1 ... +inf, v_(n/2) at middle.
+  const Vector zero = {}, one = zero + 1.0f, plus_inf = zero + kInf, minus_inf = zero - kInf;
+  for (int part = 0; part < kParts; ++part) {
+    // Counts as floats, so that they select floats lane by lane.
+    Vector valid = zero, missing = zero, below, row;
+    for (int r = 0; r < slots; ++r) {
+      std::memcpy(&row, values[r].data() + Width * part, sizeof(row));
+      valid += row == row ? one : zero;  // not NaN
+    }
+    for (int l = 0; l < Width; ++l) below[l] = middle - std::floor(0.5f * valid[l]);
+    for (int r = 0; r < slots; ++r) {
+      std::memcpy(&row, values[r].data() + Width * part, sizeof(row));
+      const auto absent = row != row;  // NaN
+      const Vector filled = absent ? (missing < below ? minus_inf : plus_inf) : row;
+      std::memcpy(values[r].data() + Width * part, &filled, sizeof(filled));
+      missing += absent ? one : zero;
+    }
+    for (int l = 0; l < Width; ++l) counts[Width * part + l] = static_cast<int>(valid[l]);
+  }
+  for (const std::pair<int, int>& exchange : exchanges) {
+    float* low = values[exchange.first].data();
+    float* high = values[exchange.second].data();
+    for (int part = 0; part < kParts; ++part) {
+      // One vector a load: a vector read from two smaller stores stalls its forwarding.
+      Vector a, b;
+      std::memcpy(&a, low + Width * part, sizeof(a));
+      std::memcpy(&b, high + Width * part, sizeof(b));
+      // std::min and std::max lane by lane (the first argument where both are equal).
+      const Vector smaller = b < a ? b : a;
+      const Vector larger = a < b ? b : a;
+      std::memcpy(low + Width * part, &smaller, sizeof(smaller));
+      std::memcpy(high + Width * part, &larger, sizeof(larger));
+    }
+  }
+  for (int l = 0; l < MedianNetwork::kLanes; ++l) medians[l] = values[middle][l];
 }
 
-void store(const FloatQuad& value, int quad, MedianNetwork::Lanes* lanes) {
-  storeQuad(value, lanes->data() + 4 * quad);
+// Plain x86-64 (SSE2): two quads.
+void runOnQuads(const std::vector<std::pair<int, int>>& exchanges, int slots, int middle,
+                MedianNetwork::Lanes* values, int* counts, float* medians) {
+  runNetwork<FloatQuad, 4>(exchanges, slots, middle, values, counts, medians);
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define OCCUPANCY_FUSION_HAS_AVX2_PATH 1
+// With AVX2 (chosen at run time): one octet, half the instructions.
+__attribute__((target("avx2"))) void runOnOctets(const std::vector<std::pair<int, int>>& exchanges,
+                                                 int slots, int middle,
+                                                 MedianNetwork::Lanes* values, int* counts,
+                                                 float* medians) {
+  runNetwork<FloatOctet, 8>(exchanges, slots, middle, values, counts, medians);
+}
+#endif
 
 }  // namespace
 
 void MedianNetwork::medians(Lanes* values, int* counts, float* medians) const {
-  // A set of n values whose missing ones become middle - n / 2 times -inf and the rest +inf has
-  // its upper median on the middle wire: -inf ... v_0 .. v_n-1 ... +inf, v_(n/2) at middle.
-  constexpr float kInf = std::numeric_limits<float>::infinity();
-  const FloatQuad zero = {}, one = zero + 1.0f, plus_inf = zero + kInf, minus_inf = zero - kInf;
-  for (int q = 0; q < kQuads; ++q) {
-    // Counts as floats, so that they select floats lane by lane.
-    FloatQuad valid = zero, missing = zero, below;
-    for (int r = 0; r < slots_; ++r) {
-      const FloatQuad row = load(values[r], q);
-      valid += row == row ? one : zero;  // not NaN
-    }
-    for (int l = 0; l < 4; ++l) below[l] = middle_ - std::floor(0.5f * valid[l]);
-    for (int r = 0; r < slots_; ++r) {
-      const FloatQuad row = load(values[r], q);
-      const auto absent = row != row;  // NaN
-      store(absent ? (missing < below ? minus_inf : plus_inf) : row, q, &values[r]);
-      missing += absent ? one : zero;
-    }
-    for (int l = 0; l < 4; ++l) counts[4 * q + l] = static_cast<int>(valid[l]);
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
+  if (use_octets_) {
+    runOnOctets(exchanges_, slots_, middle_, values, counts, medians);
+    return;
   }
-  for (const std::pair<int, int>& exchange : exchanges_) {
-    // The wires copied: the stores (as bytes) could otherwise change them.
-    const int low = exchange.first, high = exchange.second;
-    FloatQuad a[kQuads], b[kQuads];
-    for (int q = 0; q < kQuads; ++q) {
-      a[q] = load(values[low], q);
-      b[q] = load(values[high], q);
-    }
-    for (int q = 0; q < kQuads; ++q) {
-      // std::min and std::max lane by lane (the first argument where both are equal).
-      store(b[q] < a[q] ? b[q] : a[q], q, &values[low]);
-      store(a[q] < b[q] ? b[q] : a[q], q, &values[high]);
-    }
-  }
-  for (int l = 0; l < kLanes; ++l) medians[l] = values[middle_][l];
+#endif
+  runOnQuads(exchanges_, slots_, middle_, values, counts, medians);
 }
 
 }  // namespace occupancy_fusion

@@ -51,15 +51,23 @@ void expectMediansOf(const MedianNetwork& network, const int* counts, std::mt199
   }
 }
 
+// The widest vectors the processor has (AVX2 on most x86-64) and plain x86-64's: each against
+// std::nth_element.
+constexpr MedianNetwork::Instructions kInstructions[] = {MedianNetwork::Instructions::kWidest,
+                                                         MedianNetwork::Instructions::kBaseline};
+
 TEST(MedianNetwork, GivesTheUpperMedianOfEverySet) {
-  std::mt19937 rng(7);
-  for (int slots : {1, 2, 3, 5, 13, 16, 17, 25, 41, 61, 113, 481, 961, 1024}) {
-    const MedianNetwork network(slots);
-    std::uniform_int_distribution<int> count_of(0, slots);
-    for (int trial = 0; trial < 60; ++trial) {
-      int counts[kLanes];
-      for (int& count : counts) count = count_of(rng);
-      expectMediansOf(network, counts, &rng, trial % 2 == 1);
+  for (const auto instructions : kInstructions) {
+    SCOPED_TRACE(instructions == MedianNetwork::Instructions::kWidest ? "widest" : "baseline");
+    std::mt19937 rng(7);
+    for (int slots : {1, 2, 3, 5, 13, 16, 17, 25, 41, 61, 113, 481, 961, 1024}) {
+      const MedianNetwork network(slots, instructions);
+      std::uniform_int_distribution<int> count_of(0, slots);
+      for (int trial = 0; trial < 60; ++trial) {
+        int counts[kLanes];
+        for (int& count : counts) count = count_of(rng);
+        expectMediansOf(network, counts, &rng, trial % 2 == 1);
+      }
     }
   }
 }
@@ -67,13 +75,44 @@ TEST(MedianNetwork, GivesTheUpperMedianOfEverySet) {
 TEST(MedianNetwork, EveryCountOfValidValues) {
   // The missing values become -inf or +inf so that the upper median lands on the middle wire,
   // for each count, even or odd, and wherever the missing values are.
-  std::mt19937 rng(11);
-  for (int slots : {24, 25}) {
-    const MedianNetwork network(slots);
-    for (int count = 0; count <= slots; ++count) {
-      int counts[kLanes];
-      for (int& c : counts) c = count;
-      expectMediansOf(network, counts, &rng, false);
+  for (const auto instructions : kInstructions) {
+    std::mt19937 rng(11);
+    for (int slots : {24, 25}) {
+      const MedianNetwork network(slots, instructions);
+      for (int count = 0; count <= slots; ++count) {
+        int counts[kLanes];
+        for (int& c : counts) c = count;
+        expectMediansOf(network, counts, &rng, false);
+      }
+    }
+  }
+}
+
+TEST(MedianNetwork, BothInstructionSetsGiveTheSameBits) {
+  // The measured surface's maps must not depend on the processor: the same rows, with missing
+  // values and ties, through both.
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> uniform(-5.0f, 5.0f);
+  std::bernoulli_distribution missing(0.3);
+  for (int slots : {7, 25, 113}) {
+    const MedianNetwork widest(slots, MedianNetwork::Instructions::kWidest);
+    const MedianNetwork baseline(slots, MedianNetwork::Instructions::kBaseline);
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<MedianNetwork::Lanes> rows(slots);
+      for (auto& row : rows) {
+        for (float& value : row) value = missing(rng) ? std::nanf("") : std::round(uniform(rng));
+      }
+      std::vector<MedianNetwork::Lanes> copy = rows;
+      int counts[kLanes], baseline_counts[kLanes];
+      float medians[kLanes], baseline_medians[kLanes];
+      widest.medians(rows.data(), counts, medians);
+      baseline.medians(copy.data(), baseline_counts, baseline_medians);
+      for (int l = 0; l < kLanes; ++l) {
+        EXPECT_EQ(counts[l], baseline_counts[l]);
+        if (counts[l] > 0) {
+          EXPECT_EQ(medians[l], baseline_medians[l]);
+        }
+      }
     }
   }
 }

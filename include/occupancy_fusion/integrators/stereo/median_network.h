@@ -18,8 +18,12 @@ class MedianNetwork {
   static constexpr int kMaxSlots = 1024;
   using Lanes = std::array<float, kLanes>;  // one value of each set
 
+  // The vector instructions the network runs on: the widest the processor has (AVX2 on x86-64,
+  // chosen at run time), or plain x86-64's (SSE2). Both give the same bits.
+  enum class Instructions { kWidest, kBaseline };
+
   // For sets of up to `slots` values (1 .. kMaxSlots); throws std::invalid_argument otherwise.
-  explicit MedianNetwork(int slots);
+  explicit MedianNetwork(int slots, Instructions instructions = Instructions::kWidest);
 
   int slots() const { return slots_; }
   std::size_t exchanges() const { return exchanges_.size(); }
@@ -33,6 +37,7 @@ class MedianNetwork {
  private:
   int slots_;
   int middle_;                                  // the output wire of the median
+  bool use_octets_;                             // AVX2: the lanes in one vector, not two
   std::vector<std::pair<int, int>> exchanges_;  // (low, high) wires, in order
 };
 
