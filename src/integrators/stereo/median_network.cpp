@@ -10,6 +10,12 @@
 
 #include "float_quads.h"
 
+// The AVX2 path (target attribute, run-time check) where the compiler can build it beside the
+// baseline one.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define OCCUPANCY_FUSION_HAS_AVX2_PATH 1
+#endif
+
 namespace occupancy_fusion {
 
 namespace {
@@ -53,7 +59,7 @@ std::vector<std::pair<int, int>> prunedTo(const std::vector<std::pair<int, int>>
 namespace {
 
 bool hasAvx2() {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
   return __builtin_cpu_supports("avx2");
 #else
   return false;
@@ -131,8 +137,7 @@ void runOnQuads(const std::vector<std::pair<int, int>>& exchanges, int slots, in
   runNetwork<FloatQuad, 4>(exchanges, slots, middle, values, counts, medians);
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define OCCUPANCY_FUSION_HAS_AVX2_PATH 1
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
 // With AVX2 (chosen at run time): one octet, half the instructions.
 __attribute__((target("avx2"))) void runOnOctets(const std::vector<std::pair<int, int>>& exchanges,
                                                  int slots, int middle,
