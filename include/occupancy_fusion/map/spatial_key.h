@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include <tsl/robin_map.h>
 #include <tsl/robin_set.h>
@@ -24,6 +25,39 @@ inline std::uint64_t packKey(const Eigen::Vector3i& index) {
   auto field = [](int v) { return static_cast<std::uint64_t>(v + kOffset) & kMask; };
   return field(index.x()) | (field(index.y()) << kKeyBitsPerAxis3D) |
          (field(index.z()) << (2 * kKeyBitsPerAxis3D));
+}
+
+// packKey of (floor(x[k]), floor(y[k]), floor(z[k])) for k < count, count even: the keys of
+// many points given in voxels (point / resolution), two per SSE2 instruction on x86-64 (a
+// scalar conversion of each coordinate to int takes three instructions in a chain). Exact where
+// every coordinate is finite and within +-2^51; elsewhere a meaningless key without undefined
+// behaviour (callers read only the keys of usable points).
+inline void packFlooredKeys(const double* x, const double* y, const double* z, int count,
+                            std::uint64_t* keys) {
+  using DoublePair = double __attribute__((vector_size(2 * sizeof(double))));
+  using KeyPair = std::uint64_t __attribute__((vector_size(2 * sizeof(std::uint64_t))));
+  using MaskPair = std::int64_t __attribute__((vector_size(2 * sizeof(std::int64_t))));
+  // v + 1.5 * 2^52 rounds v to its nearest integer (one unit of the sum's last place), and the
+  // low bits of the sum's representation are that integer in two's complement: floor(v) is it,
+  // one less where the rounding went up.
+  constexpr double kRounding = 6755399441055744.0;
+  constexpr std::uint64_t kMask = (std::uint64_t{1} << kKeyBitsPerAxis3D) - 1;
+  constexpr std::uint64_t kOffset = kMaxKeyCoordinate3D + 1;  // as packKey
+  const DoublePair rounding = {kRounding, kRounding};
+  const double* const axes[3] = {x, y, z};
+  for (int k = 0; k < count; k += 2) {
+    KeyPair key = {0, 0};
+    for (int axis = 0; axis < 3; ++axis) {
+      DoublePair v;
+      std::memcpy(&v, axes[axis] + k, sizeof(v));
+      const DoublePair nearest = v + rounding;
+      const MaskPair rounded_up = (nearest - rounding) > v;  // -1 in those lanes
+      // Vector casts reinterpret the bits.
+      const KeyPair field = ((KeyPair)nearest + (KeyPair)rounded_up + kOffset) & kMask;
+      key |= field << (axis * kKeyBitsPerAxis3D);
+    }
+    std::memcpy(keys + k, &key, sizeof(key));
+  }
 }
 
 inline Eigen::Vector3i unpackKey3(std::uint64_t key) {

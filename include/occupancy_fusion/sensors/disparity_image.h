@@ -128,11 +128,24 @@ class DisparityPointConverter {
   // sigma_z when the result is kPoint.
   Result convert(int u, double ray_y, float d, Eigen::Vector3f* point, float* sigma_z) const {
     if (!(std::isfinite(d) && d > 0 && d >= min_disparity_)) return Result::kNoMatch;
-    const double z = focal_baseline_ / d;
-    const double sigma = depthSigma(z, lambda_);
+    const double z = depthOf(d);
+    return finish(d, z, xOf(u, z), ray_y, point, sigma_z);
+  }
+
+  // convert()'s two divisions, apart so that a run of pixels can take them together (vector
+  // division, the same bits): the depth z of disparity d and the x of pixel column u at depth z.
+  double depthOf(float d) const { return focal_baseline_ / d; }
+  double xOf(int u, double z) const { return z * (u - camera_.cx) / camera_.fx; }
+  double depthSigmaOf(double z) const { return depthSigma(z, lambda_); }  // convert()'s sigma_z
+
+  // convert() given depthOf(d) and xOf(u, depthOf(d)), whatever d is (also an invalid one).
+  Result finish(float d, double z, double x, double ray_y, Eigen::Vector3f* point,
+                float* sigma_z) const {
+    if (!(std::isfinite(d) && d > 0 && d >= min_disparity_)) return Result::kNoMatch;
+    const double sigma = depthSigmaOf(z);
     if (max_ratio_ >= 0 && sigma > max_ratio_ * z) return Result::kUncertain;
-    *point = Eigen::Vector3f(static_cast<float>(z * (u - camera_.cx) / camera_.fx),
-                             static_cast<float>(z * ray_y), static_cast<float>(z));
+    *point = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(z * ray_y),
+                             static_cast<float>(z));
     *sigma_z = static_cast<float>(sigma);
     // A disparity near 0 or an absurd focal length or baseline can put the point beyond float
     // range or round its depth to 0: the ray caster could not walk to it.

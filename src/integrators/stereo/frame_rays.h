@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <vector>
@@ -24,8 +25,21 @@ struct FrameRays {
 
 // The standard deviation along the ray of a camera point with depth standard deviation sigma_z:
 // sigma_z is along the optical axis; along the ray it grows by range / z.
+// The norm's sum is written out, in the order Eigen's norm() takes on x86-64, so that the frame's
+// conversion, which computes it for many pixels at once, gives the same bits on every build.
 inline float rangeSigmaOf(const Eigen::Vector3f& camera_point, float sigma_z) {
-  return sigma_z * camera_point.norm() / camera_point.z();
+  const float x = camera_point.x(), y = camera_point.y(), z = camera_point.z();
+  return sigma_z * std::sqrt(x * x + (y * y + z * z)) / z;
+}
+
+// transform * point, its sums written out as Eigen's (see rangeSigmaOf).
+inline Eigen::Vector3f transformPoint(const Eigen::Isometry3f& transform,
+                                      const Eigen::Vector3f& point) {
+  const Eigen::Matrix3f& r = transform.linear();
+  const Eigen::Vector3f& t = transform.translation();
+  return {t.x() + ((r(0, 0) * point.x() + r(0, 1) * point.y()) + r(0, 2) * point.z()),
+          t.y() + ((r(1, 0) * point.x() + r(1, 1) * point.y()) + r(1, 2) * point.z()),
+          t.z() + ((r(2, 0) * point.x() + r(2, 1) * point.y()) + r(2, 2) * point.z())};
 }
 
 // disparityToPoints' points, moved to the map frame as VisibilityStereoIntegrator's

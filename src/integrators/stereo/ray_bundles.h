@@ -27,32 +27,56 @@ struct RayTarget {
   bool isUsable() const { return key < kNoPoint; }
 };
 
+// The squared length of v, its sum written out in the order Eigen's squaredNorm() takes on x86-64
+// (SSE2), so that the frame's conversion, which computes it for many pixels at once, gives the
+// same bits on every build.
+inline double squaredLength(const Eigen::Vector3d& v) {
+  return (v.x() * v.x() + v.y() * v.y()) + v.z() * v.z();
+}
+
 // The squared range of a point the ray caster can walk to from origin, or -1: finite, within the
 // frame's key range (keys hold 2^20 voxels each way; the walk may continue a few sigma past the
 // point) and, with needs_direction, apart from the origin (the walk past the point needs a
-// direction). The squared range, not the range: no square root for a test against 0.
-inline double usableSquaredRange(const Eigen::Vector3d& point, const Eigen::Vector3d& origin,
+// direction). The squared range, not the range: no square root for a test against 0. Given the
+// point's finiteness, its offset from the origin and squaredLength(offset).
+inline double usableSquaredRange(bool finite, const Eigen::Vector3d& offset, double squared_range,
                                  double resolution, bool needs_direction) {
-  if (!point.allFinite()) return -1.0;
-  const Eigen::Vector3d offset = point - origin;
-  const double squared_range = offset.squaredNorm();
+  if (!finite) return -1.0;
   if (needs_direction && !(squared_range > 0)) return -1.0;
   const double limit = 0.5 * kMaxKeyCoordinate3D * resolution;
   return (offset.array().abs() < limit).all() ? squared_range : -1.0;
 }
 
-// The point's end voxel when the ray caster can walk to it from origin (usableSquaredRange) and
-// its range sigma is finite and non-negative; otherwise key = RayTarget::kUnusable. Inline: called
-// per pixel by the frame's conversion.
+inline double usableSquaredRange(const Eigen::Vector3d& point, const Eigen::Vector3d& origin,
+                                 double resolution, bool needs_direction) {
+  const Eigen::Vector3d offset = point - origin;
+  return usableSquaredRange(point.allFinite(), offset, squaredLength(offset), resolution,
+                            needs_direction);
+}
+
+// Where the ray of a point with range sigma `sigma` goes, given usableSquaredRange of the point
+// and its coordinates in voxels (point / resolution, read only where the point is usable): its
+// end voxel, or key = RayTarget::kUnusable where the range or the sigma (not finite, negative)
+// rules it out (isUsable).
+inline bool isUsable(double usable_squared_range, float sigma) {
+  return usable_squared_range >= 0 && std::isfinite(sigma) && sigma >= 0;
+}
+
+inline RayTarget rayTargetOf(double usable_squared_range, float sigma,
+                             const Eigen::Vector3d& point_in_voxels) {
+  if (!isUsable(usable_squared_range, sigma)) return RayTarget{RayTarget::kUnusable, 0.0};
+  const VoxelIndex voxel(floorToInt(point_in_voxels.x()), floorToInt(point_in_voxels.y()),
+                         floorToInt(point_in_voxels.z()));  // voxelIndexOf
+  return RayTarget{packKey(voxel), usable_squared_range};
+}
+
+// The point's RayTarget seen from origin (the overload above). Inline: called per point.
 inline RayTarget rayTargetOf(const Eigen::Vector3f& point_f, float sigma,
                              const Eigen::Vector3d& origin, double resolution,
                              bool needs_direction) {
   const Eigen::Vector3d point = point_f.cast<double>();
-  const double squared_range = usableSquaredRange(point, origin, resolution, needs_direction);
-  const bool usable_sigma = std::isfinite(sigma) && sigma >= 0;
-  return squared_range >= 0 && usable_sigma
-             ? RayTarget{packKey(voxelIndexOf(point, resolution)), squared_range}
-             : RayTarget{RayTarget::kUnusable, 0.0};
+  return rayTargetOf(usableSquaredRange(point, origin, resolution, needs_direction), sigma,
+                     point / resolution);
 }
 
 // rayTargetOf of every point, on every thread of a parallel region for a large frame.

@@ -673,7 +673,7 @@ void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& 
   range_sigmas->resize(camera_points.size());
   for (std::size_t i = 0; i < camera_points.size(); ++i) {
     const Eigen::Vector3f& p = camera_points.points[i];
-    (*points_in_map)[i] = transform * p;
+    (*points_in_map)[i] = transformPoint(transform, p);
     (*range_sigmas)[i] = rangeSigmaOf(p, camera_points.depth_sigmas[i]);
   }
   if (pixels_read != nullptr) *pixels_read = camera_points.pixels_read;

@@ -2,13 +2,16 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
 #include <stdexcept>
 #include <thread>
 #include <tuple>
+#include <vector>
 
+#include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
@@ -78,6 +81,40 @@ TEST(VoxelMap, IndexingFloorsAndCentresAreHalfwayIncludingNegatives) {
   EXPECT_FALSE(map.isInRange({std::nan(""), 0, 0}));
   EXPECT_FALSE(map.isInRange({1e9, 0, 0}));
   EXPECT_TRUE(map.isInRange({-1000, 20, 3}));
+}
+
+// The keys of many points at once equal packKey of each floored point, also at integers, just
+// below and above them, at halves (which round to even on the way), for negatives and at the
+// key range's ends; non-finite and huge coordinates give some key without a fault.
+TEST(SpatialKey, PackFlooredKeysEqualsFlooringAndPackingEachPoint) {
+  std::vector<double> values = {0.0,       -0.0,       0.5,         1.5,         2.5, -0.5,
+                                -1.5,      -2.5,       1e-300,      -1e-300,     7.0, -7.0,
+                                1048575.0, -1048576.0, 0.999999999, -0.999999999};
+  for (const double integer : {3.0, -3.0, 1000.0, -1000.0, 1048575.0, -1048575.0}) {
+    values.push_back(std::nextafter(integer, -1e9));
+    values.push_back(std::nextafter(integer, 1e9));
+  }
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> uniform(-1048576.0, 1048575.0);
+  while (values.size() < 4000) values.push_back(uniform(random));
+  const std::size_t count = values.size();  // even
+  std::vector<double> x(count), y(count), z(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    x[k] = values[k];
+    y[k] = values[(k * 7 + 3) % count];
+    z[k] = values[(k * 13 + 5) % count];
+  }
+  std::vector<std::uint64_t> keys(count);
+  packFlooredKeys(x.data(), y.data(), z.data(), static_cast<int>(count), keys.data());
+  for (std::size_t k = 0; k < count; ++k) {
+    const VoxelIndex floored(static_cast<int>(std::floor(x[k])), static_cast<int>(std::floor(y[k])),
+                             static_cast<int>(std::floor(z[k])));
+    ASSERT_EQ(keys[k], packKey(floored)) << x[k] << " " << y[k] << " " << z[k];
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  const double bad_x[2] = {std::nan(""), inf}, bad_y[2] = {-inf, 1e300}, bad_z[2] = {1e17, -1e60};
+  std::uint64_t bad_keys[2];
+  packFlooredKeys(bad_x, bad_y, bad_z, 2, bad_keys);  // no fault; the keys mean nothing
 }
 
 TEST(VoxelMap, UnknownIsNotFreeAndUpdatesAccumulateWithClamping) {
