@@ -14,6 +14,7 @@
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "ray_bundles.h"
+#include "span_schedule.h"
 
 namespace occupancy_fusion {
 
@@ -537,7 +538,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   // Without bundling every slot is a ray; its usability is checked in the parallel loop.
   const int count = static_cast<int>(config_.bundle_rays ? bundles.size() : points_in_map.size());
   const int threads = std::max(1, std::min(omp_get_max_threads(), count / 256));
-  const int chunk = std::clamp(count / (8 * threads), 64, 512);
+  SpanSchedule schedule(count, threads, std::clamp(count / (16 * threads), 32, 256));
   std::vector<FrameUpdates> per_thread(threads);
   // Room for the frame's voxels up front: growing the table rehashes every entry several times.
   // On the Middlebury benchmark a bundled ray adds 5 to 8 voxels of its own.
@@ -549,30 +550,32 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
 #pragma omp parallel num_threads(threads) reduction(+ : skipped, visits, hits, invisible)
   {
     MapSnapshot snapshot(map);
-    RayCaster caster(frame, &snapshot, &per_thread[omp_get_thread_num()]);
-    // Chunks of neighbouring pixels keep the previous-ray cache useful on every
-    // thread; at least eight per thread, so that the threads finish together.
-#pragma omp for schedule(dynamic, chunk)
-    for (int ray = 0; ray < count; ++ray) {
-      const std::uint32_t i = config_.bundle_rays ? bundles[ray] : static_cast<std::uint32_t>(ray);
-      Eigen::Vector3d point = points_in_map[i].cast<double>();
-      const float sigma = range_sigmas[i];
-      if (!config_.bundle_rays) {
-        const RayTarget end =
-            given_ends != nullptr
-                ? (*given_ends)[i]
-                : rayTargetOf(points_in_map[i], sigma, sensor_origin, resolution, visibility_mode);
-        if (!end.isPoint()) continue;
-        if (!end.isUsable()) {
-          ++skipped;
-          continue;
+    const int thread = omp_get_thread_num();
+    RayCaster caster(frame, &snapshot, &per_thread[thread]);
+    int first = 0, last = 0;
+    while (schedule.next(thread, &first, &last)) {
+      for (int ray = first; ray < last; ++ray) {
+        const std::uint32_t i =
+            config_.bundle_rays ? bundles[ray] : static_cast<std::uint32_t>(ray);
+        Eigen::Vector3d point = points_in_map[i].cast<double>();
+        const float sigma = range_sigmas[i];
+        if (!config_.bundle_rays) {
+          const RayTarget end = given_ends != nullptr
+                                    ? (*given_ends)[i]
+                                    : rayTargetOf(points_in_map[i], sigma, sensor_origin,
+                                                  resolution, visibility_mode);
+          if (!end.isPoint()) continue;
+          if (!end.isUsable()) {
+            ++skipped;
+            continue;
+          }
         }
+        // discretize = true: OctoMap's bundled ray ends at the end voxel's centre.
+        if (config_.bundle_rays && !visibility_mode) {
+          point = (voxelIndexOf(point, resolution).cast<double>().array() + 0.5) * resolution;
+        }
+        caster.cast(point, sigma);
       }
-      // discretize = true: OctoMap's bundled ray ends at the end voxel's centre.
-      if (config_.bundle_rays && !visibility_mode) {
-        point = (voxelIndexOf(point, resolution).cast<double>().array() + 0.5) * resolution;
-      }
-      caster.cast(point, sigma);
     }
     visits += caster.counters().voxel_visits;
     hits += caster.counters().cache_hits;

@@ -416,6 +416,37 @@ TEST(VisibilityStereoIntegratorTest, BundledRaysAreTheNearestAndFarthestPointPer
   EXPECT_NE(asTable(bundled), asTable(unbundled));
 }
 
+// The rays are handed to the threads in contiguous spans, a thread that is done taking chunks
+// from the back of another's: on any number of threads every ray is cast once (the same voxel
+// visits) and the updates are those of one thread.
+TEST(VisibilityStereoIntegratorTest, AnyNumberOfThreadsCastsEveryRayOnceWithTheSameUpdates) {
+  VoxelMap map(mapConfig());
+  scatter(9, &map);
+  const RandomFrame frame = randomFrame(6000, 10);  // 23 times a thread's minimum of 256 rays
+  VisibilityStereoConfig octomap = perRay();
+  octomap.method = StereoIntegrationMethod::kOctomap;  // every ray walks to its point
+  const int before = omp_get_max_threads();
+  for (const VisibilityStereoConfig& config : {perRay(), octomap}) {
+    const VisibilityStereoIntegrator integrator(config);
+    std::vector<StereoVoxelUpdate> alone, shared;
+    omp_set_num_threads(1);
+    const StereoIntegrationStats one =
+        integrator.computeUpdates(frame.points, frame.sigmas, kOrigin, map, &alone);
+    EXPECT_EQ(one.rays, frame.points.size());
+    EXPECT_GT(one.voxel_visits, 5 * one.rays);
+    for (const int threads : {2, 3, 5, 8}) {
+      SCOPED_TRACE(threads);
+      omp_set_num_threads(threads);
+      const StereoIntegrationStats many =
+          integrator.computeUpdates(frame.points, frame.sigmas, kOrigin, map, &shared);
+      EXPECT_EQ(many.rays, one.rays);
+      EXPECT_EQ(many.voxel_visits, one.voxel_visits);
+      EXPECT_EQ(asTable(shared), asTable(alone));
+    }
+  }
+  omp_set_num_threads(before);
+}
+
 // From 8192 points on, the grouping runs in consecutive parts on every thread and joins them in
 // order: the same rays as one pass, also for voxels whose points straddle a part boundary, with
 // equal ranges on both sides of it (the first point counts) and a nearer point after it.
