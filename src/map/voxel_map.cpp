@@ -119,17 +119,6 @@ bool VoxelMap::isInRange(const Eigen::Vector3d& point) const {
   return point.allFinite() && (point.array().abs() < limit).all();
 }
 
-BlockIndex VoxelMap::blockOf(const VoxelIndex& index) {
-  // Arithmetic shift floors negative indices too.
-  return {index.x() >> VoxelBlock::kSideLog2, index.y() >> VoxelBlock::kSideLog2,
-          index.z() >> VoxelBlock::kSideLog2};
-}
-
-int VoxelMap::linearIndexInBlock(const VoxelIndex& index) {
-  constexpr int mask = VoxelBlock::kSide - 1;
-  return VoxelBlock::linearIndex(index.x() & mask, index.y() & mask, index.z() & mask);
-}
-
 VoxelIndex VoxelMap::voxelIndex(const BlockIndex& block, int linear) {
   return block * VoxelBlock::kSide + VoxelBlock::localIndex(linear);
 }

@@ -180,8 +180,16 @@ class VoxelMap {
   VoxelIndex indexOf(const Eigen::Vector3d& point) const;
   Eigen::Vector3d centerOf(const VoxelIndex& index) const;
   bool isInRange(const Eigen::Vector3d& point) const;  // finite and representable
-  static BlockIndex blockOf(const VoxelIndex& index);
-  static int linearIndexInBlock(const VoxelIndex& index);
+  // Inline: the integrators call these for every voxel they read, from another library.
+  static BlockIndex blockOf(const VoxelIndex& index) {
+    // Arithmetic shift floors negative indices too.
+    return {index.x() >> VoxelBlock::kSideLog2, index.y() >> VoxelBlock::kSideLog2,
+            index.z() >> VoxelBlock::kSideLog2};
+  }
+  static int linearIndexInBlock(const VoxelIndex& index) {
+    constexpr int mask = VoxelBlock::kSide - 1;
+    return VoxelBlock::linearIndex(index.x() & mask, index.y() & mask, index.z() & mask);
+  }
   static VoxelIndex voxelIndex(const BlockIndex& block, int linear);
 
   // Point queries.
