@@ -309,7 +309,9 @@ TEST(VisibilityStereoIntegratorTest, CacheDoesNotChangeTheResult) {
   EXPECT_LE(sorted_stats.cache_hits, sorted_stats.voxel_visits);
 }
 
-void expectOctomapModeEqualsPointCloudIntegrator(double max_range) {
+// shift: added to the sensor and the points (float points, as the integrators take them).
+void expectOctomapModeEqualsPointCloudIntegrator(double max_range,
+                                                 const Eigen::Vector3f& shift = {0, 0, 0}) {
   VisibilityStereoConfig config = perRay();
   config.method = StereoIntegrationMethod::kOctomap;
   config.max_range = max_range;
@@ -320,8 +322,10 @@ void expectOctomapModeEqualsPointCloudIntegrator(double max_range) {
   VoxelMap ours(mapConfig());
   VoxelMap reference(mapConfig());
   for (unsigned frame = 0; frame < 3; ++frame) {
-    const RandomFrame points = randomFrame(3000, 10 + frame);
-    const Eigen::Vector3d origin(0.03 * frame, -0.02 * frame, 0.01);
+    RandomFrame points = randomFrame(3000, 10 + frame);
+    for (Eigen::Vector3f& point : points.points) point += shift;
+    const Eigen::Vector3d origin =
+        Eigen::Vector3d(0.03 * frame, -0.02 * frame, 0.01) + shift.cast<double>();
     stereo.integrate(points.points, points.sigmas, origin, &ours);
     cloud.integrate(points.points, origin, &reference);
   }
@@ -343,6 +347,12 @@ TEST(VisibilityStereoIntegratorTest, OctomapModeEqualsPointCloudIntegrator) {
 TEST(VisibilityStereoIntegratorTest, OctomapModeMaxRangeEqualsPointCloudIntegrator) {
   // The points lie 1-3.4 m away: about half are beyond 2 m and clear their rays up to 2 m only.
   expectOctomapModeEqualsPointCloudIntegrator(2.0);
+}
+
+TEST(VisibilityStereoIntegratorTest, OctomapModeFarFromTheOriginEqualsPointCloudIntegrator) {
+  // The frame's table keys blocks relative to the sensor's block: far out, at negative
+  // coordinates and across block borders on every axis, no two voxels may share an entry.
+  expectOctomapModeEqualsPointCloudIntegrator(-1.0, Eigen::Vector3f(-4000.37f, 2500.81f, -63.95f));
 }
 
 // bundle_rays: groups of points sharing a voxel at different depths and lateral positions, as the
