@@ -5,16 +5,21 @@ first projected_map that holds it (the MapServer's projected_map_stamps lists th
 grid holds that the one before did not); the mapping manager's and the player's CPU share of the
 machine's cores.
 
-Sensor messages are not deserialised: every watched message type starts with its std_msgs/Header,
-whose stamp is read from the raw bytes. A latency is this node's ROS clock at the grid's arrival
-(the bag's /clock, published at 1 kHz, under use_sim_time) minus the frame's stamp.
+The measurement keeps off the cores it measures: the frames sent are read from the bag after the
+run (the stamps in each message's std_msgs/Header, read from the raw bytes) rather than by
+subscribing to the images here, and the bag's time comes from this node's wall clock less the
+player's offset, the smallest (wall arrival - /clock) seen, so that the player's /clock may run
+at 100 Hz without rounding the latencies to its period. (Images received in Python and a 1 kHz
+/clock delivered to every node took about a third of 2 cores before.) A latency is that bag time
+at the grid's arrival minus the frame's stamp.
 
 Writes a CSV with one row per window (--window s): per topic the frames sent, the median and the
 99th percentile latency of the frames stamped in it; the processes' CPU share. Prints a summary.
 
 Usage: robot_budget_monitor.py --duration S --warmup S --csv FILE --summary FILE
-       --player-pid PID [--manager NAME] --topic TOPIC [--topic TOPIC]...
+       --player-pid PID --bag BAG [--manager NAME] --topic TOPIC [--topic TOPIC]...
 """
+
 import argparse
 import bisect
 import csv
@@ -23,9 +28,11 @@ import struct
 import threading
 import time
 
+import rosbag
 import rospy
 from graph_probe import Diagnostics, cpu_seconds, node_pid
 from occupancy_fusion.msg import IntegratedStamps
+from rosgraph_msgs.msg import Clock
 
 # The mappers' diagnostics task of each sensor topic's frames.
 TASKS = {"depth": "depth mapping", "disparity": "disparity mapping", "scan": "laser mapping"}
@@ -38,6 +45,14 @@ def header_stamp(raw):
     return secs + nsecs * 1e-9
 
 
+def busy_and_total_ticks():
+    """The machine's CPU ticks (all cores) spent busy, and in all, from /proc/stat."""
+    with open("/proc/stat") as stat:
+        fields = [int(v) for v in stat.readline().split()[1:]]
+    idle = fields[3] + fields[4]  # idle, iowait
+    return sum(fields) - idle, sum(fields)
+
+
 def percentile(values, fraction):
     """The value of rank fraction * (n - 1), nearest rank; None without values."""
     if not values:
@@ -46,29 +61,45 @@ def percentile(values, fraction):
     return ordered[min(len(ordered) - 1, int(round(fraction * (len(ordered) - 1))))]
 
 
-class Recorder:
-    """Frames sent per topic (stamps) and the grids' arrivals with what each held."""
+def sent_stamps(bag_path, topics):
+    """Per topic the header stamps of the bag's messages on it."""
+    stamps = {topic: [] for topic in topics}
+    with rosbag.Bag(bag_path) as bag:
+        for topic, raw, _ in bag.read_messages(topics=topics, raw=True):
+            stamps[topic].append(header_stamp(raw[1]))
+    return stamps
 
-    def __init__(self, topics):
+
+class Recorder:
+    """The grids' arrivals with what each held, and the player's clock offset."""
+
+    def __init__(self):
         self.lock = threading.Lock()
-        self.sent = {topic: [] for topic in topics}
-        self.grids = []  # (wall arrival, {topic: newest stamp held})
+        self.offset = None  # wall - bag time, its smallest sample
+        self.grids = []  # (bag time of arrival, {topic: newest stamp held})
         self.diagnostics = Diagnostics()
-        for topic in topics:
-            rospy.Subscriber(topic, rospy.AnyMsg, self.on_frame, callback_args=topic,
-                             queue_size=200)
+        rospy.Subscriber("/clock", Clock, self.on_clock, queue_size=10)
         rospy.Subscriber("projected_map_stamps", IntegratedStamps, self.on_grid, queue_size=50)
         # The outputs a planner and rviz read, watched so that the MapServer builds them.
         self.outputs = [rospy.Subscriber(topic, rospy.AnyMsg, lambda _: None, queue_size=1)
                         for topic in ("projected_map", "occupied_cells_vis_array")]
 
-    def on_frame(self, message, topic):
-        stamp = header_stamp(message._buff)
+    def on_clock(self, message):
+        offset = time.time() - message.clock.to_sec()
         with self.lock:
-            self.sent[topic].append(stamp)
+            if self.offset is None or offset < self.offset:
+                self.offset = offset
+
+    def bag_time(self, wall=None):
+        """The bag's time at a wall time (now by default)."""
+        with self.lock:
+            offset = self.offset
+        if offset is None:  # before the first /clock: the ROS clock, rounded to its period
+            return rospy.get_rostime().to_sec()
+        return (time.time() if wall is None else wall) - offset
 
     def on_grid(self, message):
-        arrival = rospy.get_rostime().to_sec()
+        arrival = time.time()
         listed = [(source, stamp.to_sec()) for source, stamp in zip(message.sources, message.stamps)]
         with self.lock:
             self.grids.append((arrival, listed))
@@ -98,6 +129,7 @@ def main():
     parser.add_argument("--window", type=float, default=5.0, help="s per CSV row")
     parser.add_argument("--manager", default="/occupancy_fusion_manager")
     parser.add_argument("--player-pid", type=int, required=True, help="rosbag play's process")
+    parser.add_argument("--bag", required=True, help="the bag played (the frames sent)")
     parser.add_argument("--topic", action="append", required=True,
                         help="a sensor topic (resolved name); repeat for each")
     parser.add_argument("--csv", required=True)
@@ -105,30 +137,33 @@ def main():
     args = parser.parse_args(rospy.myargv()[1:])
 
     rospy.init_node("robot_budget_monitor", disable_signals=True)
-    recorder = Recorder(args.topic)
+    recorder = Recorder()
     manager_pid, player_pid = node_pid(args.manager, "/robot_budget_monitor"), args.player_pid
     cores = os.cpu_count()
     time.sleep(args.warmup)
     start = time.time()
-    ros_start = rospy.get_rostime().to_sec()
+    ros_start = recorder.bag_time()
     start_counts = {task: recorder.counts(task) for task in TASKS.values()}
     cpu_start = {pid: cpu_seconds(pid) for pid in (manager_pid, player_pid)}
+    machine_start = busy_and_total_ticks()
     windows = []
     next_window = start + args.window
     while time.time() < start + args.duration:
         time.sleep(max(0.0, min(next_window, start + args.duration) - time.time()))
         now = time.time()
-        windows.append((now, rospy.get_rostime().to_sec(),
+        windows.append((now, recorder.bag_time(),
                         {pid: cpu_seconds(pid) for pid in (manager_pid, player_pid)}))
         next_window += args.window
     end = time.time()
-    ros_end = rospy.get_rostime().to_sec()
+    ros_end = recorder.bag_time()
     end_counts = {task: recorder.counts(task) for task in TASKS.values()}
+    machine_end = busy_and_total_ticks()
     time.sleep(1.0)  # grids holding the last frames of the run
     with recorder.lock:
-        sent = {topic: [s for s in stamps if ros_start <= s < ros_end]
-                for topic, stamps in recorder.sent.items()}
-        grids = list(recorder.grids)
+        arrivals = list(recorder.grids)
+    grids = [(recorder.bag_time(arrival), frames) for arrival, frames in arrivals]
+    sent = {topic: [s for s in stamps if ros_start <= s < ros_end]
+            for topic, stamps in sent_stamps(args.bag, args.topic).items()}
 
     per_topic = {topic: latencies(stamps, grids, topic) for topic, stamps in sent.items()}
     columns = ["elapsed_s", "manager_cpu_share", "player_cpu_share"]
@@ -158,6 +193,9 @@ def main():
     for name, pid in (("mapping manager", manager_pid), ("rosbag play", player_pid)):
         share = (windows[-1][2][pid] - cpu_start[pid]) / ((windows[-1][0] - start) * cores)
         lines.append("%s CPU: %.1f %% of %d cores" % (name, 100.0 * share, cores))
+    busy, total = (after - before for after, before in zip(machine_end, machine_start))
+    lines.append("machine busy: %.1f %% of %d cores (every process, the measurement's included)"
+                 % (100.0 * busy / max(total, 1), cores))
     all_latencies = []
     for topic in args.topic:
         values = [v for v in per_topic[topic].values() if v is not None]
