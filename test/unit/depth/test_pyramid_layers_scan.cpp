@@ -1,8 +1,9 @@
 // Eq. 10's layers against an independent cell-by-cell scan of M: an odd-sized image (partial
 // border cells), invalid pixels, and values placed symmetrically about the layers' distances
 // so that different measurements tie and the scan order (rows of a cell top to bottom, each
-// left to right, first one kept) decides.
+// left to right, first one kept) decides. The large image's layers are built on two threads.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <cstring>
@@ -20,13 +21,15 @@ using test_support::sameBits;
 using test_support::scanCell;
 using test_support::ScanResult;
 
-TEST(DistancePyramid, LayersEqualACellByCellScanIncludingTiesAndBorders) {
+void expectLayersEqualACellByCellScan(int width, int height, int threads) {
+  const int previous_threads = omp_get_max_threads();
+  omp_set_num_threads(threads);
   CameraIntrinsics camera;
-  camera.width = 37;
-  camera.height = 23;
+  camera.width = width;
+  camera.height = height;
   camera.fx = camera.fy = 1e6;  // rays all but parallel: M equals the depth
-  camera.cx = 18.0;
-  camera.cy = 11.0;
+  camera.cx = width / 2;
+  camera.cy = height / 2;
   // t_0 = 16: t_i = 16, 8, 4, 2, 1, 0.5; 3 and 5 tie for t = 4, 6 and 10 for t = 8, ...
   const std::vector<float> values{0.75f, 1.5f, 2.5f, 3.0f, 5.0f, 6.0f, 10.0f, 12.0f, 20.0f};
   std::mt19937 random(7);
@@ -58,6 +61,17 @@ TEST(DistancePyramid, LayersEqualACellByCellScanIncludingTiesAndBorders) {
       EXPECT_GT(ties_decided, 0);  // the image really exercises the tie rule
     }
   }
+  omp_set_num_threads(previous_threads);
+}
+
+TEST(DistancePyramid, LayersEqualACellByCellScanIncludingTiesAndBorders) {
+  expectLayersEqualACellByCellScan(37, 23, 1);
+}
+
+TEST(DistancePyramid, LayersOfALargeImageBuiltOnTwoThreadsEqualACellByCellScan) {
+  // 641 x 481 px: above the size from which the layers are built on all threads, partial border
+  // cells at every level.
+  expectLayersEqualACellByCellScan(641, 481, 2);
 }
 
 }  // namespace
