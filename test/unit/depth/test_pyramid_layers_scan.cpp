@@ -69,9 +69,11 @@ TEST(DistancePyramid, LayersEqualACellByCellScanIncludingTiesAndBorders) {
 }
 
 TEST(DistancePyramid, LayersOfALargeImageBuiltOnTwoThreadsEqualACellByCellScan) {
-  // 641 x 481 px: above the size from which the layers are built on all threads, partial border
-  // cells at every level.
+  // Above the sizes from which the layers are scanned, bucketed and merged on all threads, with
+  // partial border cells at every level: a VGA and an HD depth image (at 1281 x 721 the 16 px
+  // layer's merge ran on two threads before it ran at VGA size).
   expectLayersEqualACellByCellScan(641, 481, 2);
+  expectLayersEqualACellByCellScan(1281, 721, 2);
 }
 
 }  // namespace
