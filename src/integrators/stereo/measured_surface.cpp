@@ -237,13 +237,17 @@ class SampleLattice {
       const float* mirrored = &samples_[index(i, j - dj)];
       const int last = dj == 0 ? -1 : reach;
       for (int di = -reach; di <= last; ++di, ++slot) {
-        for (int l = 0; l < kLanes; ++l) {
-          rows[slot][l] = 0.5f * (row[l * stride + di] + mirrored[l * stride - di]);
+        for (int q = 0; q < kLanes; q += 4) {
+          const FloatQuad first = lanes(row + q * stride + di, stride);
+          const FloatQuad second = lanes(mirrored + q * stride - di, stride);
+          storeQuad(0.5f * (first + second), rows[slot].data() + q);
         }
       }
     }
     const float* centre = &samples_[index(i, j)];
-    for (int l = 0; l < kLanes; ++l) rows[slot][l] = centre[l * stride];
+    for (int q = 0; q < kLanes; q += 4) {
+      storeQuad(lanes(centre + q * stride, stride), rows[slot].data() + q);
+    }
   }
   // The samples within `reach` of the lattice points (i + l * stride, j) themselves, not pair
   // means, on a checkerboard (offsets whose sum is even: half of them, as evenly spread over the
@@ -254,12 +258,20 @@ class SampleLattice {
     for (int dj = -reach; dj <= reach; ++dj) {
       const float* row = &samples_[index(i, j + dj)];
       for (int di = -reach + (reach + dj) % 2; di <= reach; di += 2, ++slot) {
-        for (int l = 0; l < kLanes; ++l) rows[slot][l] = row[l * stride + di];
+        for (int q = 0; q < kLanes; q += 4) {
+          storeQuad(lanes(row + q * stride + di, stride), rows[slot].data() + q);
+        }
       }
     }
   }
 
  private:
+  // Four samples `stride` apart, written to the median network's rows as one quad: it reads
+  // them back as vectors, which wait for smaller stores (one per lane) to leave the store buffer.
+  static FloatQuad lanes(const float* first, int stride) {
+    if (stride == 1) return loadQuad(first);
+    return FloatQuad{first[0], first[stride], first[2 * stride], first[3 * stride]};
+  }
   std::size_t index(int i, int j) const {
     return static_cast<std::size_t>(j + pad_) * columns_ + (i + pad_);
   }
@@ -394,25 +406,20 @@ void MeasuredSurface::extendByOneNode() {
 }
 
 bool MeasuredSurface::isStep(int i, int j, int di, int dj, double step_px) const {
-  // The edge from node (i, j) to (i + di, j + dj) against the edges before and after it.
+  // The edge from node (i, j) to (i + di, j + dj) against the edges before and after it: a step
+  // where it differs from every one of them that has both ends, and at least one has. Without
+  // branches on the cells: holes and steps come in no order a predictor could learn.
   const double first = cellAt(i, j), second = cellAt(i + di, j + dj);
   const double change = second - first;
-  bool compared = false;
-  if (i - di >= 0 && j - dj >= 0) {
-    const double before = cellAt(i - di, j - dj);
-    if (!std::isnan(before)) {
-      if (!(std::abs(change - (first - before)) > step_px)) return false;
-      compared = true;
-    }
-  }
-  if (i + 2 * di < columns_ && j + 2 * dj < rows_) {
-    const double after = cellAt(i + 2 * di, j + 2 * dj);
-    if (!std::isnan(after)) {
-      if (!(std::abs(change - (after - second)) > step_px)) return false;
-      compared = true;
-    }
-  }
-  return compared;
+  const bool has_before = i - di >= 0 && j - dj >= 0;
+  const bool has_after = i + 2 * di < columns_ && j + 2 * dj < rows_;
+  const double before = has_before ? cellAt(i - di, j - dj) : kNoSurface;
+  const double after = has_after ? cellAt(i + 2 * di, j + 2 * dj) : kNoSurface;
+  const bool before_compared = before == before, after_compared = after == after;  // not NaN
+  const bool differs_before = std::abs(change - (first - before)) > step_px;
+  const bool differs_after = std::abs(change - (after - second)) > step_px;
+  return (before_compared | after_compared) & (!before_compared | differs_before) &
+         (!after_compared | differs_after);
 }
 
 void MeasuredSurface::findSteps(double step_px) {

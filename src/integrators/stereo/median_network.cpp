@@ -7,8 +7,13 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "float_quads.h"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#endif
 
 // The AVX2 path (target attribute, run-time check) where the compiler can build it beside the
 // baseline one.
@@ -98,7 +103,7 @@ inline __attribute__((always_inline)) void runNetwork(
   const Vector zero = {}, one = zero + 1.0f, plus_inf = zero + kInf, minus_inf = zero - kInf;
   for (int part = 0; part < kParts; ++part) {
     // Counts as floats, so that they select floats lane by lane.
-    Vector valid = zero, missing = zero, below, row;
+    Vector valid = zero, missing = zero, below, row = zero;
     for (int r = 0; r < slots; ++r) {
       std::memcpy(&row, values[r].data() + Width * part, sizeof(row));
       valid += row == row ? one : zero;  // not NaN
@@ -131,10 +136,153 @@ inline __attribute__((always_inline)) void runNetwork(
   for (int l = 0; l < MedianNetwork::kLanes; ++l) medians[l] = values[middle][l];
 }
 
+// The pruned network of a slot count known at compile time (the measured surface's windows of
+// 3 x 3 to 9 x 9 samples): the exchanges unrolled on constant wires, so that the lanes' values
+// stay in registers. The runtime network loads each exchange's wires from its list and its
+// values from memory, four fifths of the surface's median time.
+struct Exchange {
+  int low, high;
+};
+template <int Slots>
+struct FixedNetwork {
+  static constexpr int kMiddle = Slots / 2;
+  struct List {
+    std::array<Exchange, 1024> items{};
+    int size = 0;
+  };
+  // As oddEvenMergeSort and prunedTo above, at compile time.
+  static constexpr List build() {
+    List all{};
+    int wires = 1;
+    while (wires < Slots) wires *= 2;
+    for (int p = 1; p < wires; p *= 2) {
+      for (int k = p; k >= 1; k /= 2) {
+        for (int j = k % p; j + k < wires; j += 2 * k) {
+          for (int i = 0; i < k && i < wires - j - k; ++i) {
+            const int low = i + j, high = i + j + k;
+            if (low / (2 * p) == high / (2 * p) && high < Slots)
+              all.items[all.size++] = {low, high};
+          }
+        }
+      }
+    }
+    bool needed[Slots]{};
+    needed[kMiddle] = true;
+    List kept{};
+    for (int e = all.size - 1; e >= 0; --e) {
+      const Exchange exchange = all.items[e];
+      if (!needed[exchange.low] && !needed[exchange.high]) continue;
+      needed[exchange.low] = needed[exchange.high] = true;
+      kept.items[kept.size++] = exchange;
+    }
+    List ordered{};
+    for (int e = kept.size - 1; e >= 0; --e) ordered.items[ordered.size++] = kept.items[e];
+    return ordered;
+  }
+  static constexpr List kList = build();
+};
+
+template <int Slots, typename Vector, std::size_t... E>
+inline __attribute__((always_inline)) void exchangeAll(Vector* wires, std::index_sequence<E...>) {
+  constexpr const auto& list = FixedNetwork<Slots>::kList;
+  // std::min and std::max lane by lane, as runNetwork.
+  auto exchange = [](Vector& a, Vector& b) {
+    const Vector smaller = b < a ? b : a;
+    const Vector larger = a < b ? b : a;
+    a = smaller;
+    b = larger;
+  };
+  (exchange(wires[list.items[E].low], wires[list.items[E].high]), ...);
+}
+
+// runNetwork for a fixed network on loaded wires (Width lanes): the same fill of the missing
+// values and the same exchanges in the same order, so the same bits.
+template <int Slots, typename Vector, int Width>
+inline __attribute__((always_inline)) void medianOfWires(Vector* wires, int* counts,
+                                                         float* medians) {
+  constexpr int kMiddle = FixedNetwork<Slots>::kMiddle;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const Vector zero = {}, one = zero + 1.0f, plus_inf = zero + kInf, minus_inf = zero - kInf;
+  Vector valid = zero, missing = zero, below;
+  for (int r = 0; r < Slots; ++r) valid += wires[r] == wires[r] ? one : zero;  // not NaN
+  for (int l = 0; l < Width; ++l) below[l] = kMiddle - std::floor(0.5f * valid[l]);
+  for (int r = 0; r < Slots; ++r) {
+    const auto absent = wires[r] != wires[r];  // NaN
+    wires[r] = absent ? (missing < below ? minus_inf : plus_inf) : wires[r];
+    missing += absent ? one : zero;
+  }
+  exchangeAll<Slots>(wires, std::make_index_sequence<FixedNetwork<Slots>::kList.size>());
+  for (int l = 0; l < Width; ++l) {
+    counts[l] = static_cast<int>(valid[l]);
+    medians[l] = wires[kMiddle][l];
+  }
+}
+
+template <int Slots>
+void runFixedOnQuads(MedianNetwork::Lanes* values, int* counts, float* medians) {
+  for (int part = 0; part < MedianNetwork::kLanes / 4; ++part) {
+    FloatQuad wires[Slots];
+    for (int r = 0; r < Slots; ++r) wires[r] = loadQuad(values[r].data() + 4 * part);
+    medianOfWires<Slots, FloatQuad, 4>(wires, counts + 4 * part, medians + 4 * part);
+  }
+}
+
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
+template <int Slots>
+__attribute__((target("avx2"))) void runFixedOnOctets(MedianNetwork::Lanes* values, int* counts,
+                                                      float* medians) {
+  FloatOctet wires[Slots];
+  for (int r = 0; r < Slots; ++r) {
+    // The rows are written a quad at a time (the measured surface's lattice): each half is
+    // loaded from its own store. A vector loaded from two smaller stores that are still in the
+    // store buffer waits for both to reach the cache, which was most of the network's time.
+    const float* row = values[r].data();
+    wires[r] =
+        _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(row)), _mm_loadu_ps(row + 4), 1);
+  }
+  medianOfWires<Slots, FloatOctet, 8>(wires, counts, medians);
+}
+#endif
+
+// The fixed networks of 2 r (r + 1) + 1 slots, reach r = 1 .. 4: the pair means (and the
+// checkerboard samples) of the measured surface's windows of 3 x 3 to 9 x 9 samples. False for
+// other slot counts.
+template <template <int> class Run>
+bool runFixed(int slots, MedianNetwork::Lanes* values, int* counts, float* medians) {
+  switch (slots) {
+    case 5:
+      Run<5>::run(values, counts, medians);
+      return true;
+    case 13:
+      Run<13>::run(values, counts, medians);
+      return true;
+    case 25:
+      Run<25>::run(values, counts, medians);
+      return true;
+    case 41:
+      Run<41>::run(values, counts, medians);
+      return true;
+    default:
+      return false;
+  }
+}
+template <int Slots>
+struct OnQuads {
+  static void run(MedianNetwork::Lanes* v, int* c, float* m) { runFixedOnQuads<Slots>(v, c, m); }
+};
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
+template <int Slots>
+struct OnOctets {
+  static void run(MedianNetwork::Lanes* v, int* c, float* m) { runFixedOnOctets<Slots>(v, c, m); }
+};
+#endif
+
 // Plain x86-64 (SSE2): two quads.
 void runOnQuads(const std::vector<std::pair<int, int>>& exchanges, int slots, int middle,
                 MedianNetwork::Lanes* values, int* counts, float* medians) {
-  runNetwork<FloatQuad, 4>(exchanges, slots, middle, values, counts, medians);
+  if (!runFixed<OnQuads>(slots, values, counts, medians)) {
+    runNetwork<FloatQuad, 4>(exchanges, slots, middle, values, counts, medians);
+  }
 }
 
 #ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
@@ -143,7 +291,9 @@ __attribute__((target("avx2"))) void runOnOctets(const std::vector<std::pair<int
                                                  int slots, int middle,
                                                  MedianNetwork::Lanes* values, int* counts,
                                                  float* medians) {
-  runNetwork<FloatOctet, 8>(exchanges, slots, middle, values, counts, medians);
+  if (!runFixed<OnOctets>(slots, values, counts, medians)) {
+    runNetwork<FloatOctet, 8>(exchanges, slots, middle, values, counts, medians);
+  }
 }
 #endif
 
