@@ -221,18 +221,60 @@ struct FrameMeasurement {
     depth->sigma = std::clamp(lambda * depth->z_surface * depth->z_surface, sigma_min, sigma_max);
     return true;
   }
-  // P(O) of a voxel by the measurement: the surface lies in front of its centre.
-  bool occupancy(const VoxelIndex& voxel, double* p) const {
-    Depth depth;
-    if (!depthOf(voxel, &depth)) return false;
-    *p = depth.surfaceInFront(0.0, *phi);
-    return true;
+};
+
+// One thread's reads of the frame's measurement, each voxel's made once: a voxel is read as the
+// neighbour of up to three others (Eq. 1) and for its own visibility, each read a projection into
+// the image and a read of the surface grid. Found through the voxel's block, as FrameUpdates.
+class MeasurementMemo {
+ public:
+  MeasurementMemo(const FrameMeasurement& measurement, const VoxelIndex& origin)
+      : measurement_(measurement), origin_block_(VoxelMap::blockOf(origin)) {}
+
+  // logit of P(O) by the measurement (the surface lies in front of the voxel's centre),
+  // unclamped (+inf where P(O) = 1); NaN where the image does not say.
+  float occupancyLogOdds(const VoxelIndex& voxel) { return readingOf(voxel).log_odds; }
+  // Visible while the surface lies behind the voxel's front; 1 where the image does not say.
+  float visibility(const VoxelIndex& voxel) { return readingOf(voxel).visibility; }
+
+ private:
+  struct Reading {
+    float log_odds, visibility;  // visibility NaN: not read yet
+  };
+  using BlockReadings = std::array<Reading, VoxelBlock::kVolume>;
+  static constexpr float kNotRead = std::numeric_limits<float>::quiet_NaN();
+
+  const Reading& readingOf(const VoxelIndex& voxel) {
+    Reading& reading = blockReadings(VoxelMap::blockOf(voxel))[VoxelMap::linearIndexInBlock(voxel)];
+    if (std::isnan(reading.visibility)) {
+      FrameMeasurement::Depth depth;
+      if (measurement_.depthOf(voxel, &depth)) {
+        reading.log_odds = logit(depth.surfaceInFront(0.0, *measurement_.phi));
+        reading.visibility = static_cast<float>(
+            1.0 - depth.surfaceInFront(-measurement_.face_offset, *measurement_.phi));
+      } else {
+        reading = {kNotRead, 1.0f};
+      }
+    }
+    return reading;
   }
-  // Visible while the surface lies behind its front; 1 where the image does not say.
-  double visibility(const VoxelIndex& voxel) const {
-    Depth depth;
-    return depthOf(voxel, &depth) ? 1.0 - depth.surfaceInFront(-face_offset, *phi) : 1.0;
+  // Keyed relative to the frame's origin block, as FrameUpdates::blockSlots.
+  Reading* blockReadings(const BlockIndex& block) {
+    if (last_ != nullptr && block == last_block_) return last_;
+    const auto [it, inserted] = block_numbers_.try_emplace(
+        packKey(BlockIndex(block - origin_block_)), static_cast<std::uint32_t>(blocks_.size()));
+    if (inserted) blocks_.emplace_back().fill({kNotRead, kNotRead});
+    last_block_ = block;
+    last_ = blocks_[it->second].data();
+    return last_;
   }
+
+  const FrameMeasurement& measurement_;
+  BlockIndex origin_block_;
+  SpatialKeyMap<std::uint32_t> block_numbers_;
+  std::deque<BlockReadings> blocks_;  // a deque: growing it moves no table
+  BlockIndex last_block_ = BlockIndex::Zero();
+  Reading* last_ = nullptr;
 };
 
 // How Eq. 1 reads a neighbour (the paper's OctoMap has no node for a never-observed one; see
@@ -245,15 +287,15 @@ struct NeighbourReading {
   float min_log_odds, max_log_odds;  // the map's clamping bounds
 
   // The neighbour's log-odds: the map's (NaN: never observed) with the measurement's.
-  float read(const VoxelIndex& neighbour, float map_log_odds) const {
+  float read(const VoxelIndex& neighbour, float map_log_odds, MeasurementMemo* memo) const {
     const bool known = !std::isnan(map_log_odds);
-    double p = 0;
-    if ((known && !fuse_known) || !measurement->occupancy(neighbour, &p)) {
-      return known ? map_log_odds : unknown_log_odds;
-    }
+    const float measured_log_odds = (known && !fuse_known) || measurement->surface == nullptr
+                                        ? std::numeric_limits<float>::quiet_NaN()
+                                        : memo->occupancyLogOdds(neighbour);
+    if (std::isnan(measured_log_odds)) return known ? map_log_odds : unknown_log_odds;
     // Not clamped below: space the frame measures free, P(O) = 0, passes the visibility on
     // unchanged, as Eq. 3 does for q_max and above.
-    const float measured = std::min(logit(p), max_log_odds);
+    const float measured = std::min(measured_log_odds, max_log_odds);
     if (!known) return measured;
     // The measurement's free-space evidence weighs at most as one clamped free voxel, so that a
     // surface the map knows well still occludes where the frame's median misses it (an object
@@ -269,7 +311,8 @@ struct NeighbourReading {
 // no neighbour left, nothing occludes v. min P(O) = sigmoid(min log-odds), one
 // exp instead of three.
 double localOcclusion(const VoxelIndex& voxel, const VoxelIndex& origin,
-                      const NeighbourReading& reading, MapSnapshot* snapshot) {
+                      const NeighbourReading& reading, MapSnapshot* snapshot,
+                      MeasurementMemo* memo) {
   float min_log_odds = std::numeric_limits<float>::infinity();
   bool any = false;
   for (int axis = 0; axis < 3; ++axis) {
@@ -278,7 +321,7 @@ double localOcclusion(const VoxelIndex& voxel, const VoxelIndex& origin,
     neighbour[axis] += voxel[axis] > origin[axis] ? -1 : 1;
     float value = snapshot->logOdds(neighbour);
     if (std::isnan(value) && reading.ignore_unknown) continue;
-    value = reading.read(neighbour, value);
+    value = reading.read(neighbour, value, memo);
     min_log_odds = std::min(min_log_odds, value);
     any = true;
   }
@@ -315,8 +358,9 @@ struct FrameContext {
 
 class RayCaster {
  public:
-  RayCaster(const FrameContext& frame, MapSnapshot* snapshot, FrameUpdates* updates)
-      : frame_(frame), snapshot_(snapshot), updates_(updates) {}
+  RayCaster(const FrameContext& frame, MapSnapshot* snapshot, MeasurementMemo* memo,
+            FrameUpdates* updates)
+      : frame_(frame), snapshot_(snapshot), memo_(memo), updates_(updates) {}
 
   void cast(const Eigen::Vector3d& point, double range_sigma) {
     current_.clear();
@@ -349,13 +393,12 @@ class RayCaster {
               ? updates_->occlusion(entry,
                                     [&] {
                                       return localOcclusion(index, frame_.origin_voxel,
-                                                            frame_.neighbours, snapshot_);
+                                                            frame_.neighbours, snapshot_, memo_);
                                     })
               : 0.0f;
       const float measured_visibility =
           need_occlusion && frame_.measured_visibility
-              ? updates_->measuredVisibility(entry,
-                                             [&] { return frame_.measurement.visibility(index); })
+              ? updates_->measuredVisibility(entry, [&] { return memo_->visibility(index); })
               : 1.0f;
       current_.push_back({index, entry, occlusion, measured_visibility});
     }
@@ -448,6 +491,7 @@ class RayCaster {
 
   const FrameContext& frame_;
   MapSnapshot* snapshot_;
+  MeasurementMemo* memo_;
   FrameUpdates* updates_;
   std::vector<CachedVoxel> previous_;
   std::vector<CachedVoxel> current_;
@@ -566,7 +610,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   {
     MapSnapshot snapshot(map);
     const int thread = omp_get_thread_num();
-    RayCaster caster(frame, &snapshot, &per_thread[thread]);
+    MeasurementMemo memo(measurement, frame.origin_voxel);
+    RayCaster caster(frame, &snapshot, &memo, &per_thread[thread]);
     int first = 0, last = 0;
     while (schedule.next(thread, &first, &last)) {
       for (int ray = first; ray < last; ++ray) {
