@@ -245,26 +245,14 @@ __attribute__((target("avx2"))) void runFixedOnOctets(MedianNetwork::Lanes* valu
 #endif
 
 // The fixed networks of 2 r (r + 1) + 1 slots, reach r = 1 .. 4: the pair means (and the
-// checkerboard samples) of the measured surface's windows of 3 x 3 to 9 x 9 samples. False for
-// other slot counts.
-template <template <int> class Run>
-bool runFixed(int slots, MedianNetwork::Lanes* values, int* counts, float* medians) {
-  switch (slots) {
-    case 5:
-      Run<5>::run(values, counts, medians);
-      return true;
-    case 13:
-      Run<13>::run(values, counts, medians);
-      return true;
-    case 25:
-      Run<25>::run(values, counts, medians);
-      return true;
-    case 41:
-      Run<41>::run(values, counts, medians);
-      return true;
-    default:
-      return false;
-  }
+// checkerboard samples) of the measured surface's windows of 3 x 3 to 9 x 9 samples.
+using FixedSlots = std::integer_sequence<int, 5, 13, 25, 41>;
+
+// Run<slots>::run where slots is one of FixedSlots; false for other slot counts.
+template <template <int> class Run, int... Fixed>
+bool runFixed(std::integer_sequence<int, Fixed...>, int slots, MedianNetwork::Lanes* values,
+              int* counts, float* medians) {
+  return ((slots == Fixed && (Run<Fixed>::run(values, counts, medians), true)) || ...);
 }
 template <int Slots>
 struct OnQuads {
@@ -280,7 +268,7 @@ struct OnOctets {
 // Plain x86-64 (SSE2): two quads.
 void runOnQuads(const std::vector<std::pair<int, int>>& exchanges, int slots, int middle,
                 MedianNetwork::Lanes* values, int* counts, float* medians) {
-  if (!runFixed<OnQuads>(slots, values, counts, medians)) {
+  if (!runFixed<OnQuads>(FixedSlots(), slots, values, counts, medians)) {
     runNetwork<FloatQuad, 4>(exchanges, slots, middle, values, counts, medians);
   }
 }
@@ -291,7 +279,7 @@ __attribute__((target("avx2"))) void runOnOctets(const std::vector<std::pair<int
                                                  int slots, int middle,
                                                  MedianNetwork::Lanes* values, int* counts,
                                                  float* medians) {
-  if (!runFixed<OnOctets>(slots, values, counts, medians)) {
+  if (!runFixed<OnOctets>(FixedSlots(), slots, values, counts, medians)) {
     runNetwork<FloatOctet, 8>(exchanges, slots, middle, values, counts, medians);
   }
 }
