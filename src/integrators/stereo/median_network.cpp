@@ -137,49 +137,48 @@ inline __attribute__((always_inline)) void runNetwork(
 }
 
 // The pruned network of a slot count known at compile time (the measured surface's windows of
-// 3 x 3 to 9 x 9 samples): the exchanges unrolled on constant wires, so that the lanes' values
-// stay in registers. The runtime network loads each exchange's wires from its list and its
-// values from memory, four fifths of the surface's median time.
+// 3 x 3 to 9 x 9 samples), as oddEvenMergeSort and prunedTo above: its exchanges unroll on
+// constant wires, without the runtime network's loads of each exchange's wire numbers.
 struct Exchange {
   int low, high;
 };
+struct ExchangeList {
+  std::array<Exchange, 1024> items{};  // Batcher's network on 64 wires has 543
+  int size = 0;
+};
 template <int Slots>
-struct FixedNetwork {
-  static constexpr int kMiddle = Slots / 2;
-  struct List {
-    std::array<Exchange, 1024> items{};
-    int size = 0;
-  };
-  // As oddEvenMergeSort and prunedTo above, at compile time.
-  static constexpr List build() {
-    List all{};
-    int wires = 1;
-    while (wires < Slots) wires *= 2;
-    for (int p = 1; p < wires; p *= 2) {
-      for (int k = p; k >= 1; k /= 2) {
-        for (int j = k % p; j + k < wires; j += 2 * k) {
-          for (int i = 0; i < k && i < wires - j - k; ++i) {
-            const int low = i + j, high = i + j + k;
-            if (low / (2 * p) == high / (2 * p) && high < Slots)
-              all.items[all.size++] = {low, high};
-          }
+constexpr ExchangeList prunedNetworkOf() {
+  static_assert(Slots >= 1 && Slots <= 64, "a fixed network has at most 64 wires");
+  ExchangeList all{};
+  int wires = 1;
+  while (wires < Slots) wires *= 2;
+  for (int p = 1; p < wires; p *= 2) {
+    for (int k = p; k >= 1; k /= 2) {
+      for (int j = k % p; j + k < wires; j += 2 * k) {
+        for (int i = 0; i < k && i < wires - j - k; ++i) {
+          const int low = i + j, high = i + j + k;
+          if (low / (2 * p) == high / (2 * p) && high < Slots) all.items[all.size++] = {low, high};
         }
       }
     }
-    bool needed[Slots]{};
-    needed[kMiddle] = true;
-    List kept{};
-    for (int e = all.size - 1; e >= 0; --e) {
-      const Exchange exchange = all.items[e];
-      if (!needed[exchange.low] && !needed[exchange.high]) continue;
-      needed[exchange.low] = needed[exchange.high] = true;
-      kept.items[kept.size++] = exchange;
-    }
-    List ordered{};
-    for (int e = kept.size - 1; e >= 0; --e) ordered.items[ordered.size++] = kept.items[e];
-    return ordered;
   }
-  static constexpr List kList = build();
+  bool needed[Slots]{};
+  needed[Slots / 2] = true;
+  ExchangeList kept{};
+  for (int e = all.size - 1; e >= 0; --e) {
+    const Exchange exchange = all.items[e];
+    if (!needed[exchange.low] && !needed[exchange.high]) continue;
+    needed[exchange.low] = needed[exchange.high] = true;
+    kept.items[kept.size++] = exchange;
+  }
+  ExchangeList ordered{};
+  for (int e = kept.size - 1; e >= 0; --e) ordered.items[ordered.size++] = kept.items[e];
+  return ordered;
+}
+template <int Slots>
+struct FixedNetwork {
+  static constexpr int kMiddle = Slots / 2;
+  static constexpr ExchangeList kList = prunedNetworkOf<Slots>();
 };
 
 template <int Slots, typename Vector, std::size_t... E>
