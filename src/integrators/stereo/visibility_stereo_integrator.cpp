@@ -73,6 +73,37 @@ double occupancyAfterInterpolatedMeasurement(double p_occupied, double p_inside,
 
 namespace {
 
+// 512 values a block (one per voxel) for the blocks a frame reaches, each block's array found by
+// hash once for a run of look-ups inside it. Blocks are keyed relative to the frame's origin
+// block: rays reach less than half packKey's exact range from the sensor (rayTargetOf), so every
+// key of a frame is distinct however far the sensor is from the map's origin.
+template <typename Value>
+class FrameBlockTable {
+ public:
+  explicit FrameBlockTable(Value initial) : initial_(initial) {}
+  // The voxel's value, `initial` until written.
+  Value& at(const VoxelIndex& voxel, const BlockIndex& origin_block) {
+    return values(VoxelMap::blockOf(voxel), origin_block)[VoxelMap::linearIndexInBlock(voxel)];
+  }
+
+ private:
+  Value* values(const BlockIndex& block, const BlockIndex& origin_block) {
+    if (last_ != nullptr && block == last_block_) return last_;
+    const auto [it, inserted] = block_numbers_.try_emplace(
+        packKey(BlockIndex(block - origin_block)), static_cast<std::uint32_t>(blocks_.size()));
+    if (inserted) blocks_.emplace_back().fill(initial_);
+    last_block_ = block;
+    last_ = blocks_[it->second].data();
+    return last_;
+  }
+
+  Value initial_;
+  SpatialKeyMap<std::uint32_t> block_numbers_;                 // block key -> position in blocks_
+  std::deque<std::array<Value, VoxelBlock::kVolume>> blocks_;  // growing it moves no array
+  BlockIndex last_block_ = BlockIndex::Zero();
+  Value* last_ = nullptr;
+};
+
 // The frame's updates, one entry per voxel, reduced on insertion. Entries live
 // in a vector so that the previous-ray cache can keep their positions. A voxel finds its entry
 // through its block: a table of the block's 512 entry numbers, found by hash once for the run
@@ -83,16 +114,13 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   void reserve(std::size_t voxels) {
     entries_.reserve(voxels);
     occlusions_.reserve(voxels);
-    measured_visibilities_.reserve(voxels);
   }
   std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
-    std::uint32_t& slot =
-        blockSlots(VoxelMap::blockOf(index), origin)[VoxelMap::linearIndexInBlock(index)];
+    std::uint32_t& slot = slots_.at(index, VoxelMap::blockOf(origin));
     if (slot == kNoEntry) {
       slot = static_cast<std::uint32_t>(entries_.size());
       entries_.push_back({index, 0.0f, 0.0f});
       occlusions_.push_back(kNotComputed);
-      measured_visibilities_.push_back(kNotComputed);
     }
     return slot;
   }
@@ -102,13 +130,6 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   template <typename Compute>
   float occlusion(std::uint32_t entry, Compute&& compute) {
     float& value = occlusions_[entry];
-    if (std::isnan(value)) value = static_cast<float>(compute());
-    return value;
-  }
-  // measured_visibility: the voxel's visibility by the frame's measurement, on first request.
-  template <typename Compute>
-  float measuredVisibility(std::uint32_t entry, Compute&& compute) {
-    float& value = measured_visibilities_[entry];
     if (std::isnan(value)) value = static_cast<float>(compute());
     return value;
   }
@@ -129,29 +150,10 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
  private:
   static constexpr float kNotComputed = std::numeric_limits<float>::quiet_NaN();
   static constexpr std::uint32_t kNoEntry = std::numeric_limits<std::uint32_t>::max();
-  using BlockSlots = std::array<std::uint32_t, VoxelBlock::kVolume>;
 
-  // Blocks are keyed relative to the frame's origin block: rays reach less than half packKey's
-  // exact range from the sensor (rayTargetOf), so every key of a frame is distinct however far the
-  // sensor is from the map's origin.
-  std::uint32_t* blockSlots(const BlockIndex& block, const VoxelIndex& origin) {
-    if (last_slots_ != nullptr && block == last_block_) return last_slots_;
-    const auto [it, inserted] =
-        block_numbers_.try_emplace(packKey(BlockIndex(block - VoxelMap::blockOf(origin))),
-                                   static_cast<std::uint32_t>(block_slots_.size()));
-    if (inserted) block_slots_.emplace_back().fill(kNoEntry);
-    last_block_ = block;
-    last_slots_ = block_slots_[it->second].data();
-    return last_slots_;
-  }
-
-  SpatialKeyMap<std::uint32_t> block_numbers_;  // block key -> position in block_slots_
-  std::deque<BlockSlots> block_slots_;          // a deque: growing it moves no table
-  BlockIndex last_block_ = BlockIndex::Zero();
-  std::uint32_t* last_slots_ = nullptr;
+  FrameBlockTable<std::uint32_t> slots_{kNoEntry};  // voxel -> its entry
   std::vector<StereoVoxelUpdate> entries_;
-  std::vector<float> occlusions_;             // per entry; kNotComputed until requested
-  std::vector<float> measured_visibilities_;  // per entry; kNotComputed until requested
+  std::vector<float> occlusions_;  // per entry; kNotComputed until requested
 };
 
 // Read access to the map for one thread and frame: blocks are copied once
@@ -225,7 +227,7 @@ struct FrameMeasurement {
 
 // One thread's reads of the frame's measurement, each voxel's made once: a voxel is read as the
 // neighbour of up to three others (Eq. 1) and for its own visibility, each read a projection into
-// the image and a read of the surface grid. Found through the voxel's block, as FrameUpdates.
+// the image and a read of the surface grid.
 class MeasurementMemo {
  public:
   MeasurementMemo(const FrameMeasurement& measurement, const VoxelIndex& origin)
@@ -241,11 +243,10 @@ class MeasurementMemo {
   struct Reading {
     float log_odds, visibility;  // visibility NaN: not read yet
   };
-  using BlockReadings = std::array<Reading, VoxelBlock::kVolume>;
   static constexpr float kNotRead = std::numeric_limits<float>::quiet_NaN();
 
   const Reading& readingOf(const VoxelIndex& voxel) {
-    Reading& reading = blockReadings(VoxelMap::blockOf(voxel))[VoxelMap::linearIndexInBlock(voxel)];
+    Reading& reading = readings_.at(voxel, origin_block_);
     if (std::isnan(reading.visibility)) {
       FrameMeasurement::Depth depth;
       if (measurement_.depthOf(voxel, &depth)) {
@@ -258,23 +259,10 @@ class MeasurementMemo {
     }
     return reading;
   }
-  // Keyed relative to the frame's origin block, as FrameUpdates::blockSlots.
-  Reading* blockReadings(const BlockIndex& block) {
-    if (last_ != nullptr && block == last_block_) return last_;
-    const auto [it, inserted] = block_numbers_.try_emplace(
-        packKey(BlockIndex(block - origin_block_)), static_cast<std::uint32_t>(blocks_.size()));
-    if (inserted) blocks_.emplace_back().fill({kNotRead, kNotRead});
-    last_block_ = block;
-    last_ = blocks_[it->second].data();
-    return last_;
-  }
 
   const FrameMeasurement& measurement_;
   BlockIndex origin_block_;
-  SpatialKeyMap<std::uint32_t> block_numbers_;
-  std::deque<BlockReadings> blocks_;  // a deque: growing it moves no table
-  BlockIndex last_block_ = BlockIndex::Zero();
-  Reading* last_ = nullptr;
+  FrameBlockTable<Reading> readings_{{kNotRead, kNotRead}};
 };
 
 // How Eq. 1 reads a neighbour (the paper's OctoMap has no node for a never-observed one; see
@@ -397,9 +385,7 @@ class RayCaster {
                                     })
               : 0.0f;
       const float measured_visibility =
-          need_occlusion && frame_.measured_visibility
-              ? updates_->measuredVisibility(entry, [&] { return memo_->visibility(index); })
-              : 1.0f;
+          need_occlusion && frame_.measured_visibility ? memo_->visibility(index) : 1.0f;
       current_.push_back({index, entry, occlusion, measured_visibility});
     }
     return current_.back();
