@@ -100,8 +100,8 @@ void appendLater(const Bundles& later, Bundles* bundles) {
 
 }  // namespace
 
-std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
-                                                bool visibility_mode, std::size_t* skipped) {
+std::vector<BundledRay> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
+                                             bool visibility_mode, std::size_t* skipped) {
   const bool needs_depth = visibility_mode;
   // Consecutive parts of the points grouped on every thread, then joined in order: the same
   // bundles, in the same order, as one pass (and as on one thread).
@@ -116,11 +116,10 @@ std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<RayTarget>& en
   }
   for (int part = 1; part < parts; ++part) appendLater(grouped[part], &grouped[0]);
   *skipped += grouped[0].skipped;
-  std::vector<std::uint32_t> rays;
-  rays.reserve(2 * grouped[0].list.size());
+  std::vector<BundledRay> rays;
+  rays.reserve(grouped[0].list.size());
   for (const Bundle& bundle : grouped[0].list) {
-    rays.push_back(bundle.nearest);
-    if (needs_depth && bundle.farthest != bundle.nearest) rays.push_back(bundle.farthest);
+    rays.push_back({needs_depth ? bundle.farthest : bundle.nearest, bundle.nearest});
   }
   return rays;
 }

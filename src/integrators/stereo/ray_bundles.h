@@ -84,15 +84,21 @@ std::vector<RayTarget> rayTargetsOf(const std::vector<Eigen::Vector3f>& points,
                                     const std::vector<float>& sigmas, const Eigen::Vector3d& origin,
                                     double resolution, bool needs_direction);
 
+// One walk of bundle_rays: to the point `farthest`, with the P(I_v) of the point `nearest` too
+// (the same point where the end voxel has one, and always for OctoMap's update).
+struct BundledRay {
+  std::uint32_t farthest, nearest;
+};
+
 // bundle_rays: per end voxel the nearest and the farthest usable point (see
 // VisibilityStereoConfig::bundle_rays), in the order of each voxel's first point, so that
-// neighbouring pixels stay neighbouring rays for the previous-ray cache; one ray where they are the
-// same point, and always one for OctoMap's update, whose ray ends at the voxel's centre.
-// Neighbouring pixels mostly share their end voxel, so the last voxel is checked
-// before the hash table.
+// neighbouring pixels stay neighbouring rays for the previous-ray cache; one point where they are
+// the same, and always the nearest alone for OctoMap's update, whose ray ends at the voxel's
+// centre. Neighbouring pixels mostly share their end voxel, so the last voxel is checked before
+// the hash table.
 // visibility_mode: the farthest point of each voxel too.
 // skipped: incremented per unusable point (slots without a point are not counted).
-std::vector<std::uint32_t> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
-                                                bool visibility_mode, std::size_t* skipped);
+std::vector<BundledRay> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
+                                             bool visibility_mode, std::size_t* skipped);
 
 }  // namespace occupancy_fusion

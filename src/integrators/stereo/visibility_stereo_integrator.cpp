@@ -364,6 +364,25 @@ class RayCaster {
     }
     std::swap(previous_, current_);
   }
+
+  // bundle_rays: the rays to the farthest and the nearest point of an end voxel as one walk, to
+  // the farthest, with the nearest point's P(I_v) too. Both rays cross the same voxels up to the
+  // end voxel, but for one at a corner now and then, and the same voxels have the same
+  // visibility; the reduction keeps the larger P(I_v). Two walks (cast) where the farthest lies
+  // beyond max_range.
+  void castBundle(const Eigen::Vector3d& farthest, double farthest_sigma,
+                  const Eigen::Vector3d& nearest, double nearest_sigma) {
+    const double max_range = frame_.config.max_range;
+    if (frame_.config.method == StereoIntegrationMethod::kOctomap ||
+        (max_range >= 0 && (farthest - frame_.origin).norm() > max_range)) {
+      cast(nearest, nearest_sigma);
+      cast(farthest, farthest_sigma);
+      return;
+    }
+    current_.clear();
+    castVisibility(farthest, farthest_sigma, &nearest, nearest_sigma);
+    std::swap(previous_, current_);
+  }
   const RayCounters& counters() const { return counters_; }
 
  private:
@@ -446,17 +465,46 @@ class RayCaster {
     }
   }
 
-  // Eq. 1-3 and 8 along one ray.
-  void castVisibility(const Eigen::Vector3d& point, double range_sigma) {
+  // A point's Eq. 8 along a walk: P(I_v) until the voxel where it reaches the stop value (Sec.
+  // III-C), which gets a full hit, and none after it.
+  class InsideOfPoint {
+   public:
+    InsideOfPoint(const Eigen::Vector3d& point, double range_sigma, const FrameContext& frame)
+        : range_sigma_(range_sigma), stop_(frame.config.inside_stop_probability) {
+      const Eigen::Vector3d offset = point - frame.origin;
+      range_ = offset.norm();
+      direction_ = offset / range_;
+    }
+    void close() { open_ = false; }  // adds nothing
+    bool open() const { return open_; }
+    double farthestReach() const { return open_ ? range_ + 6.0 * range_sigma_ : 0.0; }  // m
+    double next(const VoxelIndex& index, const RayCaster& caster) {
+      if (!open_) return 0.0;
+      const double p_inside = caster.insideProbability(index, direction_, range_, range_sigma_);
+      if (p_inside < stop_) return p_inside;
+      open_ = false;
+      return 1.0;  // the one further voxel with a full hit
+    }
+
+   private:
+    Eigen::Vector3d direction_;
+    double range_, range_sigma_, stop_;
+    bool open_ = true;
+  };
+
+  // Eq. 1-3 and 8 along one ray, with the P(I_v) of a second point on (nearly) the same ray where
+  // `nearest` is given (castBundle).
+  void castVisibility(const Eigen::Vector3d& point, double range_sigma,
+                      const Eigen::Vector3d* nearest = nullptr, double nearest_sigma = 0.0) {
     const FrameContext& f = frame_;
-    const Eigen::Vector3d offset = point - f.origin;
-    const double range = offset.norm();
-    const Eigen::Vector3d direction = offset / range;
+    InsideOfPoint far(point, range_sigma, f);
+    InsideOfPoint near(nearest != nullptr ? *nearest : point, nearest_sigma, f);
+    if (nearest == nullptr) near.close();
     RayTraversal ray(f.origin, point, f.resolution);
     // The walk ends where P(I_v) reaches the stop value, at the latest ~2.4
     // sigma past the point; the bound only guards against rounding.
-    const std::size_t max_steps =
-        static_cast<std::size_t>(3 * (range + 6.0 * range_sigma) / f.resolution + 8);
+    const double reach = std::max(far.farthestReach(), near.farthestReach());
+    const std::size_t max_steps = static_cast<std::size_t>(3 * reach / f.resolution + 8);
     double visibility = 1.0;
     for (std::size_t j = 0; j < max_steps; ++j) {
       const CachedVoxel& voxel = lookUp(ray.current(), j, true);
@@ -466,11 +514,9 @@ class RayCaster {
         ++counters_.rays_invisible;
         return;
       }
-      double p_inside = insideProbability(voxel.index, direction, range, range_sigma);
-      const bool stop = p_inside >= f.config.inside_stop_probability;
-      if (stop) p_inside = 1.0;  // the one further voxel with a full hit (Sec. III-C)
+      const double p_inside = std::max(far.next(voxel.index, *this), near.next(voxel.index, *this));
       updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
-      if (stop) return;
+      if (!far.open() && !near.open()) return;
       ray.next();
     }
   }
@@ -570,7 +616,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
       resolution, neighbours, measurement,   measured && config_.measured_visibility};
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
   std::size_t skipped = 0;
-  std::vector<std::uint32_t> bundles;
+  std::vector<BundledRay> bundles;
   if (config_.bundle_rays) {
     if (given_ends != nullptr) {
       bundles = bundleRaysByEndVoxel(*given_ends, visibility_mode, &skipped);
@@ -602,7 +648,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     while (schedule.next(thread, &first, &last)) {
       for (int ray = first; ray < last; ++ray) {
         const std::uint32_t i =
-            config_.bundle_rays ? bundles[ray] : static_cast<std::uint32_t>(ray);
+            config_.bundle_rays ? bundles[ray].farthest : static_cast<std::uint32_t>(ray);
         Eigen::Vector3d point = points_in_map[i].cast<double>();
         const float sigma = range_sigmas[i];
         if (!config_.bundle_rays) {
@@ -620,7 +666,12 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
         if (config_.bundle_rays && !visibility_mode) {
           point = (voxelIndexOf(point, resolution).cast<double>().array() + 0.5) * resolution;
         }
-        caster.cast(point, sigma);
+        if (config_.bundle_rays && bundles[ray].nearest != i) {
+          const std::uint32_t n = bundles[ray].nearest;
+          caster.castBundle(point, sigma, points_in_map[n].cast<double>(), range_sigmas[n]);
+        } else {
+          caster.cast(point, sigma);
+        }
       }
     }
     visits += caster.counters().voxel_visits;

@@ -405,25 +405,69 @@ RandomFrame endsPerVoxel(const RandomFrame& frame, const Eigen::Vector3d& origin
   return selected;
 }
 
-TEST(VisibilityStereoIntegratorTest, BundledRaysAreTheNearestAndFarthestPointPerEndVoxel) {
+// Points at several depths on lines of sight from the origin, a few per end voxel: the rays to a
+// voxel's nearest and farthest point cross the same voxels.
+RandomFrame pointsOnLinesOfSight(unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> lateral(-0.8, 0.8), range(1.0, 2.8), sigma(0.0, 0.2);
+  std::uniform_real_distribution<double> apart(0.0, kRes);
+  std::uniform_int_distribution<int> size(1, 4);
+  RandomFrame frame;
+  for (int line = 0; line < 300; ++line) {
+    const Eigen::Vector3d direction =
+        Eigen::Vector3d(1.0, lateral(random), 0.5 * lateral(random)).normalized();
+    const double first = range(random);
+    for (int i = size(random); i > 0; --i) {
+      frame.points.push_back((kOrigin + (first + apart(random)) * direction).cast<float>());
+      frame.sigmas.push_back(static_cast<float>(sigma(random)));
+    }
+  }
+  return frame;
+}
+
+TEST(VisibilityStereoIntegratorTest, BundledRaysWalkToTheFarthestPointWithTheNearestPointsToo) {
   VoxelMap map(mapConfig());
   scatter(7, &map);
-  const RandomFrame frame = crowdedFrame(8);
-  const RandomFrame nearest = endsPerVoxel(frame, kOrigin);
-  ASSERT_LT(3 * nearest.points.size(), 2 * frame.points.size());
+  const RandomFrame frame = pointsOnLinesOfSight(8);
+  const RandomFrame ends = endsPerVoxel(frame, kOrigin);
+  const RandomFrame nearest = endsPerVoxel(frame, kOrigin, 1);
+  ASSERT_LT(nearest.points.size() + 100, ends.points.size());  // many voxels with two ends
   std::vector<StereoVoxelUpdate> bundled, expected, unbundled;
   const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
       frame.points, frame.sigmas, kOrigin, map, &bundled);
-  const StereoIntegrationStats nearest_stats = VisibilityStereoIntegrator(perRay()).computeUpdates(
-      nearest.points, nearest.sigmas, kOrigin, map, &expected);
+  // Each ray on its own, reduced: the same updates where both rays cross the same voxels.
+  const StereoIntegrationStats two_walks = VisibilityStereoIntegrator(perRay()).computeUpdates(
+      ends.points, ends.sigmas, kOrigin, map, &expected);
   VisibilityStereoIntegrator(perRay()).computeUpdates(frame.points, frame.sigmas, kOrigin, map,
                                                       &unbundled);
   EXPECT_EQ(asTable(bundled), asTable(expected));
-  EXPECT_EQ(stats.rays, nearest.points.size());
+  EXPECT_EQ(stats.rays, nearest.points.size());  // one walk per end voxel
   EXPECT_EQ(stats.merged_points, frame.points.size() - nearest.points.size());
-  EXPECT_EQ(stats.voxel_visits, nearest_stats.voxel_visits);
-  // The other points' rays did add updates of their own, which bundling leaves out.
+  EXPECT_LT(stats.voxel_visits, two_walks.voxel_visits * 3 / 4);
+  // The points in between did add updates of their own (their full hits), which bundling leaves
+  // out.
   EXPECT_NE(asTable(bundled), asTable(unbundled));
+}
+
+TEST(VisibilityStereoIntegratorTest, BundledRaysOfAVoxelsSpreadPointsAreOneWalkEach) {
+  // Points spread across their voxels: one walk per end voxel, whose voxels and updates are
+  // those of the two rays but for voxels at a corner that only one of them crosses.
+  VoxelMap map(mapConfig());
+  scatter(7, &map);
+  const RandomFrame frame = crowdedFrame(8);
+  const RandomFrame ends = endsPerVoxel(frame, kOrigin);
+  const RandomFrame nearest = endsPerVoxel(frame, kOrigin, 1);
+  std::vector<StereoVoxelUpdate> bundled, expected;
+  const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
+      frame.points, frame.sigmas, kOrigin, map, &bundled);
+  VisibilityStereoIntegrator(perRay()).computeUpdates(ends.points, ends.sigmas, kOrigin, map,
+                                                      &expected);
+  EXPECT_EQ(stats.rays, nearest.points.size());
+  const UpdateTable ours = asTable(bundled), theirs = asTable(expected);
+  std::size_t same = 0;
+  for (const auto& [key, values] : ours) same += theirs.count(key) && theirs.at(key) == values;
+  EXPECT_GT(same, 0.9 * theirs.size());
+  EXPECT_LE(ours.size(), theirs.size());
 }
 
 // The rays are handed to the threads in contiguous spans, a thread that is done taking chunks
@@ -488,14 +532,18 @@ TEST(VisibilityStereoIntegratorTest, BundlingInPartsEqualsOnePass) {
   place(second - 2, b, 0.05f);
   place(second + 1, b_nearer, 0.05f);
   place(second + 3, b, 0.15f);
+  // Bundling the chosen points again, in one pass, gives the same walks: each voxel's nearest and
+  // farthest point (the first of equals: the copies tie in range, not in sigma).
   const RandomFrame ends = endsPerVoxel(frame, kOrigin);
   std::vector<StereoVoxelUpdate> bundled, expected;
   const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
       frame.points, frame.sigmas, kOrigin, map, &bundled);
+  omp_set_num_threads(1);
+  const StereoIntegrationStats one_pass = VisibilityStereoIntegrator(kTableI).computeUpdates(
+      ends.points, ends.sigmas, kOrigin, map, &expected);
   omp_set_num_threads(before);
-  VisibilityStereoIntegrator(perRay()).computeUpdates(ends.points, ends.sigmas, kOrigin, map,
-                                                      &expected);
-  EXPECT_EQ(stats.rays, ends.points.size());
+  EXPECT_EQ(stats.rays, endsPerVoxel(frame, kOrigin, 1).points.size());
+  EXPECT_EQ(stats.rays, one_pass.rays);
   EXPECT_EQ(asTable(bundled), asTable(expected));
 }
 
@@ -516,8 +564,8 @@ TEST(VisibilityStereoIntegratorTest, BundlingChangesNothingWithOnePointPerVoxel)
 TEST(VisibilityStereoIntegratorTest, BundleKeepsTheHitsOfTheNearestAndFarthestPoint) {
   // Three points in voxel 15 on one line, tiny sigma: 1.52 m (before voxel 15's centre at 1.55,
   // which gets its full hit), 1.55 and 1.58 m (at and past the centre: the full hit goes to voxel
-  // 16). The bundle casts the first and the last: both hits stay. The nearest point alone would
-  // lose voxel 16's.
+  // 16). The bundle walks to the last with the first's P(I_v) too: both hits stay. The nearest
+  // point alone would lose voxel 16's.
   const Eigen::Vector3f middle(1.55f, 0.05f, 0.05f), deeper(1.58f, 0.05f, 0.05f);
   const std::vector<Eigen::Vector3f> points = {middle, deeper, kPoint};
   const std::vector<float> sigmas(3, kTinySigma);
@@ -527,8 +575,8 @@ TEST(VisibilityStereoIntegratorTest, BundleKeepsTheHitsOfTheNearestAndFarthestPo
       VisibilityStereoIntegrator(kTableI).integrate(points, sigmas, kOrigin, &bundled);
   VisibilityStereoIntegrator(perRay()).integrate(points, sigmas, kOrigin, &unbundled);
   integrateOnePoint(perRay(), &nearest_only);
-  EXPECT_EQ(stats.rays, 2u);
-  EXPECT_EQ(stats.merged_points, 1u);
+  EXPECT_EQ(stats.rays, 1u);  // one walk
+  EXPECT_EQ(stats.merged_points, 2u);
   const double hit = occupancyAfterMeasurement(0.3, true, 1.0, kTableI);
   for (const VoxelMap* map : {&bundled, &unbundled}) {
     EXPECT_NEAR(probabilityAt(*map, 15), hit, 1e-6);

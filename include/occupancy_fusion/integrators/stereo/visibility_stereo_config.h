@@ -102,18 +102,22 @@ struct VisibilityStereoConfig {
   // points of a frame whose measured point falls into the same voxel share its rays. A standing
   // camera's far surfaces give tens to hundreds of pixels per voxel, and every ray is walked
   // voxel by voxel, so this bounds the frame's work by its end voxels instead of its pixels.
-  //  - kVisibility: two rays per end voxel, the nearest and the farthest point's (one if the
-  //    voxel has one point), each with its own range sigma (Eq. 7). The frame's reduction takes
-  //    the largest P(I_v) per voxel (StereoVoxelUpdate): in the end voxel and before it that is
-  //    the nearest point's, since Phi((s - r) / sigma_r) grows as r falls. Eq. 8 puts the full
-  //    hit ~2.3 sigma past a point, so the bundle's hits span from the nearest point's stop voxel
-  //    to the farthest's, and the farthest ray keeps the deepest of them. The nearest point alone
-  //    lost those (rostest sim_disparity_standing: 119 occupied voxels where it asks for >= 130);
-  //    a mean depth would put the hit where no point is. Left out: the points in between (their
-  //    depths lie between the two) and the lateral spread of the rays inside the voxel.
+  //  - kVisibility: the rays of the nearest and the farthest point (one if the voxel has one
+  //    point), each with its own range sigma (Eq. 7), as one walk to the farthest point that
+  //    carries both points' P(I_v): the two rays cross the same voxels but for one at a corner
+  //    now and then, and a second walk cost a quarter of a frame (docs/disparity_benchmark.md). The
+  //    frame's reduction takes the largest P(I_v) per voxel (StereoVoxelUpdate): in the end voxel
+  //    and before it that is the nearest point's, since Phi((s - r) / sigma_r) grows as r falls.
+  //    Eq. 8 puts the full hit ~2.3 sigma past a point, so the bundle's hits span from the nearest
+  //    point's stop voxel to the farthest's, and the farthest ray keeps the deepest of them. The
+  //    nearest point alone lost those (rostest sim_disparity_standing: 119 occupied voxels where it
+  //    asks for >= 130); a mean depth would put the hit where no point is. Left out: the points in
+  //    between (their depths lie between the two) and the lateral spread of the rays inside the
+  //    voxel.
   //  - kOctomap: one ray to the end voxel's centre, as liboctomap's discretize = true does (the
   //    depth of the point does not enter OctoMap's update), so the two compare directly.
-  // Points beyond max_range are bundled like the others.
+  // Points beyond max_range are bundled like the others (two walks where the farthest point of a
+  // voxel lies beyond it, the cut one as the walk to such a point is).
   bool bundle_rays = true;
   // The disparity image's conversion to points (sigma_d of Eq. 7, input
   // resolution).
