@@ -350,37 +350,28 @@ class RayCaster {
             FrameUpdates* updates)
       : frame_(frame), snapshot_(snapshot), memo_(memo), updates_(updates) {}
 
-  void cast(const Eigen::Vector3d& point, double range_sigma) {
-    current_.clear();
+  // The walk to `point`. bundle_rays (the visibility mode) passes the nearest point of the same
+  // end voxel too: the rays to both cross the same voxels up to it, but for one at a corner now
+  // and then, and the same voxels have the same visibility, so one walk carries both points'
+  // P(I_v) (the reduction keeps the larger). Where `point` lies beyond max_range, the cut walk
+  // carries no hit: the nearest point gets a walk of its own.
+  void cast(const Eigen::Vector3d& point, double range_sigma,
+            const Eigen::Vector3d* nearest = nullptr, double nearest_sigma = 0.0) {
     const Eigen::Vector3d offset = point - frame_.origin;
     const double range = offset.norm();
     const double max_range = frame_.config.max_range;
-    if (max_range >= 0 && range > max_range) {
+    const bool clipped = max_range >= 0 && range > max_range;
+    if (clipped && nearest != nullptr) cast(*nearest, nearest_sigma);
+    current_.clear();
+    if (clipped) {
       castClipped(frame_.origin + offset * (max_range / range), range, range_sigma);
     } else if (frame_.config.method == StereoIntegrationMethod::kOctomap) {
       castOctomap(point);
     } else {
-      castVisibility(point, range_sigma);
+      const InsideOfPoint near =
+          nearest != nullptr ? InsideOfPoint(*nearest, nearest_sigma, frame_) : InsideOfPoint();
+      castVisibility(point, range_sigma, near);
     }
-    std::swap(previous_, current_);
-  }
-
-  // bundle_rays: the rays to the farthest and the nearest point of an end voxel as one walk, to
-  // the farthest, with the nearest point's P(I_v) too. Both rays cross the same voxels up to the
-  // end voxel, but for one at a corner now and then, and the same voxels have the same
-  // visibility; the reduction keeps the larger P(I_v). Two walks (cast) where the farthest lies
-  // beyond max_range.
-  void castBundle(const Eigen::Vector3d& farthest, double farthest_sigma,
-                  const Eigen::Vector3d& nearest, double nearest_sigma) {
-    const double max_range = frame_.config.max_range;
-    if (frame_.config.method == StereoIntegrationMethod::kOctomap ||
-        (max_range >= 0 && (farthest - frame_.origin).norm() > max_range)) {
-      cast(nearest, nearest_sigma);
-      cast(farthest, farthest_sigma);
-      return;
-    }
-    current_.clear();
-    castVisibility(farthest, farthest_sigma, &nearest, nearest_sigma);
     std::swap(previous_, current_);
   }
   const RayCounters& counters() const { return counters_; }
@@ -429,13 +420,20 @@ class RayCaster {
     }
   }
 
-  // P(I_v) of Sec. III-C: the voxel reduced to its centre, at distance s along the ray from the
-  // sensor, against a point at distance range with standard deviation range_sigma.
-  double insideProbability(const VoxelIndex& index, const Eigen::Vector3d& direction, double range,
-                           double range_sigma) const {
+  // The voxel's centre, from the sensor.
+  Eigen::Vector3d centreFromOrigin(const VoxelIndex& index) const {
     const Eigen::Vector3d center = (index.cast<double>().array() + 0.5) * frame_.resolution;
-    const double s = (center - frame_.origin).dot(direction);
-    if (range_sigma > 0) return frame_.phi((s - range) / range_sigma);
+    return center - frame_.origin;
+  }
+
+  // P(I_v) of Sec. III-C: the voxel reduced to its centre (centre_from_origin), at distance s
+  // along the ray from the sensor, against a point at distance range with standard deviation
+  // range_sigma.
+  static double insideProbability(const Eigen::Vector3d& centre_from_origin,
+                                  const Eigen::Vector3d& direction, double range,
+                                  double range_sigma, const NormalCdfTable& phi) {
+    const double s = centre_from_origin.dot(direction);
+    if (range_sigma > 0) return phi((s - range) / range_sigma);
     return s >= range ? 1.0 : 0.0;
   }
 
@@ -460,7 +458,8 @@ class RayCaster {
         ++counters_.rays_invisible;
         return;
       }
-      const double p_inside = insideProbability(voxel.index, direction, range, range_sigma);
+      const double p_inside = insideProbability(centreFromOrigin(voxel.index), direction, range,
+                                                range_sigma, frame_.phi);
       updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
     }
   }
@@ -469,37 +468,35 @@ class RayCaster {
   // III-C), which gets a full hit, and none after it.
   class InsideOfPoint {
    public:
+    InsideOfPoint() = default;  // no point: adds nothing
     InsideOfPoint(const Eigen::Vector3d& point, double range_sigma, const FrameContext& frame)
-        : range_sigma_(range_sigma), stop_(frame.config.inside_stop_probability) {
+        : range_sigma_(range_sigma), stop_(frame.config.inside_stop_probability), open_(true) {
       const Eigen::Vector3d offset = point - frame.origin;
       range_ = offset.norm();
       direction_ = offset / range_;
     }
-    void close() { open_ = false; }  // adds nothing
     bool open() const { return open_; }
     double farthestReach() const { return open_ ? range_ + 6.0 * range_sigma_ : 0.0; }  // m
-    double next(const VoxelIndex& index, const RayCaster& caster) {
+    double next(const Eigen::Vector3d& centre_from_origin, const NormalCdfTable& phi) {
       if (!open_) return 0.0;
-      const double p_inside = caster.insideProbability(index, direction_, range_, range_sigma_);
+      const double p_inside =
+          insideProbability(centre_from_origin, direction_, range_, range_sigma_, phi);
       if (p_inside < stop_) return p_inside;
       open_ = false;
       return 1.0;  // the one further voxel with a full hit
     }
 
    private:
-    Eigen::Vector3d direction_;
-    double range_, range_sigma_, stop_;
-    bool open_ = true;
+    Eigen::Vector3d direction_ = Eigen::Vector3d::Zero();
+    double range_ = 0, range_sigma_ = 0, stop_ = 1;
+    bool open_ = false;
   };
 
-  // Eq. 1-3 and 8 along one ray, with the P(I_v) of a second point on (nearly) the same ray where
-  // `nearest` is given (castBundle).
-  void castVisibility(const Eigen::Vector3d& point, double range_sigma,
-                      const Eigen::Vector3d* nearest = nullptr, double nearest_sigma = 0.0) {
+  // Eq. 1-3 and 8 along one ray, with the P(I_v) of `near`, a second point on (nearly) the same
+  // ray, where it has one (cast).
+  void castVisibility(const Eigen::Vector3d& point, double range_sigma, InsideOfPoint near) {
     const FrameContext& f = frame_;
     InsideOfPoint far(point, range_sigma, f);
-    InsideOfPoint near(nearest != nullptr ? *nearest : point, nearest_sigma, f);
-    if (nearest == nullptr) near.close();
     RayTraversal ray(f.origin, point, f.resolution);
     // The walk ends where P(I_v) reaches the stop value, at the latest ~2.4
     // sigma past the point; the bound only guards against rounding.
@@ -514,7 +511,8 @@ class RayCaster {
         ++counters_.rays_invisible;
         return;
       }
-      const double p_inside = std::max(far.next(voxel.index, *this), near.next(voxel.index, *this));
+      const Eigen::Vector3d centre = centreFromOrigin(voxel.index);
+      const double p_inside = std::max(far.next(centre, f.phi), near.next(centre, f.phi));
       updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
       if (!far.open() && !near.open()) return;
       ray.next();
@@ -668,7 +666,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
         }
         if (config_.bundle_rays && bundles[ray].nearest != i) {
           const std::uint32_t n = bundles[ray].nearest;
-          caster.castBundle(point, sigma, points_in_map[n].cast<double>(), range_sigmas[n]);
+          const Eigen::Vector3d nearest = points_in_map[n].cast<double>();
+          caster.cast(point, sigma, &nearest, range_sigmas[n]);
         } else {
           caster.cast(point, sigma);
         }

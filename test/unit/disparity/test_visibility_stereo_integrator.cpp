@@ -425,49 +425,56 @@ RandomFrame pointsOnLinesOfSight(unsigned seed) {
   return frame;
 }
 
+// A frame bundled (Table I's defaults) against its voxels' nearest and farthest points cast as
+// rays of their own and reduced, on a scattered map.
+struct BundledAgainstTwoWalks {
+  explicit BundledAgainstTwoWalks(const RandomFrame& frame) : map(mapConfig()) {
+    scatter(7, &map);
+    const RandomFrame ends = endsPerVoxel(frame, kOrigin);
+    end_voxels = endsPerVoxel(frame, kOrigin, 1).points.size();
+    two_end_voxels = ends.points.size() - end_voxels;
+    std::vector<StereoVoxelUpdate> updates;
+    bundled_stats = VisibilityStereoIntegrator(kTableI).computeUpdates(frame.points, frame.sigmas,
+                                                                       kOrigin, map, &updates);
+    bundled = asTable(updates);
+    two_walks_stats = VisibilityStereoIntegrator(perRay()).computeUpdates(ends.points, ends.sigmas,
+                                                                          kOrigin, map, &updates);
+    two_walks = asTable(updates);
+  }
+  VoxelMap map;
+  std::size_t end_voxels = 0, two_end_voxels = 0;
+  StereoIntegrationStats bundled_stats, two_walks_stats;
+  UpdateTable bundled, two_walks;
+};
+
 TEST(VisibilityStereoIntegratorTest, BundledRaysWalkToTheFarthestPointWithTheNearestPointsToo) {
-  VoxelMap map(mapConfig());
-  scatter(7, &map);
   const RandomFrame frame = pointsOnLinesOfSight(8);
-  const RandomFrame ends = endsPerVoxel(frame, kOrigin);
-  const RandomFrame nearest = endsPerVoxel(frame, kOrigin, 1);
-  ASSERT_LT(nearest.points.size() + 100, ends.points.size());  // many voxels with two ends
-  std::vector<StereoVoxelUpdate> bundled, expected, unbundled;
-  const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
-      frame.points, frame.sigmas, kOrigin, map, &bundled);
+  const BundledAgainstTwoWalks run(frame);
+  ASSERT_GT(run.two_end_voxels, 100u);
   // Each ray on its own, reduced: the same updates where both rays cross the same voxels.
-  const StereoIntegrationStats two_walks = VisibilityStereoIntegrator(perRay()).computeUpdates(
-      ends.points, ends.sigmas, kOrigin, map, &expected);
-  VisibilityStereoIntegrator(perRay()).computeUpdates(frame.points, frame.sigmas, kOrigin, map,
-                                                      &unbundled);
-  EXPECT_EQ(asTable(bundled), asTable(expected));
-  EXPECT_EQ(stats.rays, nearest.points.size());  // one walk per end voxel
-  EXPECT_EQ(stats.merged_points, frame.points.size() - nearest.points.size());
-  EXPECT_LT(stats.voxel_visits, two_walks.voxel_visits * 3 / 4);
+  EXPECT_EQ(run.bundled, run.two_walks);
+  EXPECT_EQ(run.bundled_stats.rays, run.end_voxels);  // one walk per end voxel
+  EXPECT_EQ(run.bundled_stats.merged_points, frame.points.size() - run.end_voxels);
+  EXPECT_LT(run.bundled_stats.voxel_visits, run.two_walks_stats.voxel_visits * 3 / 4);
   // The points in between did add updates of their own (their full hits), which bundling leaves
   // out.
-  EXPECT_NE(asTable(bundled), asTable(unbundled));
+  std::vector<StereoVoxelUpdate> unbundled;
+  VisibilityStereoIntegrator(perRay()).computeUpdates(frame.points, frame.sigmas, kOrigin, run.map,
+                                                      &unbundled);
+  EXPECT_NE(run.bundled, asTable(unbundled));
 }
 
 TEST(VisibilityStereoIntegratorTest, BundledRaysOfAVoxelsSpreadPointsAreOneWalkEach) {
   // Points spread across their voxels: one walk per end voxel, whose voxels and updates are
   // those of the two rays but for voxels at a corner that only one of them crosses.
-  VoxelMap map(mapConfig());
-  scatter(7, &map);
-  const RandomFrame frame = crowdedFrame(8);
-  const RandomFrame ends = endsPerVoxel(frame, kOrigin);
-  const RandomFrame nearest = endsPerVoxel(frame, kOrigin, 1);
-  std::vector<StereoVoxelUpdate> bundled, expected;
-  const StereoIntegrationStats stats = VisibilityStereoIntegrator(kTableI).computeUpdates(
-      frame.points, frame.sigmas, kOrigin, map, &bundled);
-  VisibilityStereoIntegrator(perRay()).computeUpdates(ends.points, ends.sigmas, kOrigin, map,
-                                                      &expected);
-  EXPECT_EQ(stats.rays, nearest.points.size());
-  const UpdateTable ours = asTable(bundled), theirs = asTable(expected);
+  const BundledAgainstTwoWalks run(crowdedFrame(8));
+  EXPECT_EQ(run.bundled_stats.rays, run.end_voxels);
   std::size_t same = 0;
-  for (const auto& [key, values] : ours) same += theirs.count(key) && theirs.at(key) == values;
-  EXPECT_GT(same, 0.9 * theirs.size());
-  EXPECT_LE(ours.size(), theirs.size());
+  for (const auto& [key, values] : run.bundled) {
+    same += run.two_walks.count(key) && run.two_walks.at(key) == values;
+  }
+  EXPECT_GT(same, 0.9 * run.two_walks.size());
+  EXPECT_LE(run.bundled.size(), run.two_walks.size());
 }
 
 // The rays are handed to the threads in contiguous spans, a thread that is done taking chunks
