@@ -114,6 +114,7 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   void reserve(std::size_t voxels) {
     entries_.reserve(voxels);
     occlusions_.reserve(voxels);
+    inside_caps_.reserve(voxels);
   }
   std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
     std::uint32_t& slot = slots_.at(index, VoxelMap::blockOf(origin));
@@ -121,8 +122,24 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
       slot = static_cast<std::uint32_t>(entries_.size());
       entries_.push_back({index, 0.0f, 0.0f});
       occlusions_.push_back(kNotComputed);
+      inside_caps_.push_back(kNotComputed);
     }
     return slot;
+  }
+  // The frame's measurement of the entry's voxel, read on its first request: its prior (Eq. 4-6
+  // of a never-observed voxel) and the bound on its P(I_v), applied to the reduced value by
+  // capInside(). measure(&update, &cap) sets both.
+  template <typename Measure>
+  void measureOnce(std::uint32_t entry, Measure&& measure) {
+    float& cap = inside_caps_[entry];
+    if (std::isnan(cap)) measure(&entries_[entry], &cap);
+  }
+  // P(I_v) of every entry at most its measured bound: min(max over rays, bound) as the bound
+  // applied after the reduction.
+  void capInside() {
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+      if (inside_caps_[i] < entries_[i].p_inside) entries_[i].p_inside = inside_caps_[i];
+    }
   }
   // Eq. 1's local occlusion of the entry's voxel, computed on its first request: it depends only
   // on the voxel, the sensor's voxel and the map before the frame, and rays that are not
@@ -141,8 +158,15 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
     update.visibility = std::max(update.visibility, visibility);
   }
   void merge(const FrameUpdates& other, const VoxelIndex& origin) {
-    for (const StereoVoxelUpdate& theirs : other.entries_) {
-      reduce(findOrInsert(theirs.index, origin), theirs.p_inside, theirs.visibility);
+    for (std::size_t i = 0; i < other.entries_.size(); ++i) {
+      const StereoVoxelUpdate& theirs = other.entries_[i];
+      const std::size_t known = entries_.size();
+      const std::uint32_t entry = findOrInsert(theirs.index, origin);
+      if (entry >= known) {  // new here: the other thread's measurement of it (the same voxel's)
+        entries_[entry].prior = theirs.prior;
+        inside_caps_[entry] = other.inside_caps_[i];
+      }
+      reduce(entry, theirs.p_inside, theirs.visibility);
     }
   }
   std::vector<StereoVoxelUpdate>& entries() { return entries_; }
@@ -153,7 +177,8 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
 
   FrameBlockTable<std::uint32_t> slots_{kNoEntry};  // voxel -> its entry
   std::vector<StereoVoxelUpdate> entries_;
-  std::vector<float> occlusions_;  // per entry; kNotComputed until requested
+  std::vector<float> occlusions_;   // per entry; kNotComputed until requested
+  std::vector<float> inside_caps_;  // per entry; kNotComputed until measured (NaN: no bound)
 };
 
 // Read access to the map for one thread and frame: blocks are copied once
@@ -226,12 +251,20 @@ struct FrameMeasurement {
 };
 
 // One thread's reads of the frame's measurement, each voxel's made once: a voxel is read as the
-// neighbour of up to three others (Eq. 1) and for its own visibility, each read a projection into
-// the image and a read of the surface grid.
+// neighbour of up to three others (Eq. 1), for its own visibility and for its own update's prior
+// and P(I_v) bound, each read a projection into the image and a read of the surface grid.
 class MeasurementMemo {
  public:
   MeasurementMemo(const FrameMeasurement& measurement, const VoxelIndex& origin)
       : measurement_(measurement), origin_block_(VoxelMap::blockOf(origin)) {}
+
+  struct Reading {
+    float log_odds;  // logit of P(O), unclamped (+inf where P(O) = 1); NaN: the image does not say
+    float visibility;   // 1 - P(the surface lies in front of the voxel's front); NaN: not read yet
+    float in_front;     // P(the surface lies in front of the voxel's centre), that is P(O)
+    float behind_back;  // P(the surface lies in front of the voxel's back)
+    bool says() const { return !std::isnan(log_odds); }
+  };
 
   // logit of P(O) by the measurement (the surface lies in front of the voxel's centre),
   // unclamped (+inf where P(O) = 1); NaN where the image does not say.
@@ -239,30 +272,32 @@ class MeasurementMemo {
   // Visible while the surface lies behind the voxel's front; 1 where the image does not say.
   float visibility(const VoxelIndex& voxel) { return readingOf(voxel).visibility; }
 
- private:
-  struct Reading {
-    float log_odds, visibility;  // visibility NaN: not read yet
-  };
-  static constexpr float kNotRead = std::numeric_limits<float>::quiet_NaN();
-
   const Reading& readingOf(const VoxelIndex& voxel) {
     Reading& reading = readings_.at(voxel, origin_block_);
     if (std::isnan(reading.visibility)) {
       FrameMeasurement::Depth depth;
       if (measurement_.depthOf(voxel, &depth)) {
-        reading.log_odds = logit(depth.surfaceInFront(0.0, *measurement_.phi));
-        reading.visibility = static_cast<float>(
-            1.0 - depth.surfaceInFront(-measurement_.face_offset, *measurement_.phi));
+        const NormalCdfTable& phi = *measurement_.phi;
+        const double in_front = depth.surfaceInFront(0.0, phi);
+        reading.log_odds = logit(in_front);
+        reading.visibility =
+            static_cast<float>(1.0 - depth.surfaceInFront(-measurement_.face_offset, phi));
+        reading.in_front = static_cast<float>(in_front);
+        reading.behind_back =
+            static_cast<float>(depth.surfaceInFront(measurement_.face_offset, phi));
       } else {
-        reading = {kNotRead, 1.0f};
+        reading = {kNotRead, 1.0f, kNotRead, kNotRead};
       }
     }
     return reading;
   }
 
+ private:
+  static constexpr float kNotRead = std::numeric_limits<float>::quiet_NaN();
+
   const FrameMeasurement& measurement_;
   BlockIndex origin_block_;
-  FrameBlockTable<Reading> readings_{{kNotRead, kNotRead}};
+  FrameBlockTable<Reading> readings_{{kNotRead, kNotRead, kNotRead, kNotRead}};
 };
 
 // How Eq. 1 reads a neighbour (the paper's OctoMap has no node for a never-observed one; see
@@ -342,6 +377,7 @@ struct FrameContext {
   NeighbourReading neighbours;
   const FrameMeasurement& measurement;
   bool measured_visibility;  // a voxel's visibility is at most the measurement's
+  bool measured_updates;     // measured_prior or measured_inside, with a measurement
 };
 
 class RayCaster {
@@ -396,9 +432,28 @@ class RayCaster {
               : 0.0f;
       const float measured_visibility =
           need_occlusion && frame_.measured_visibility ? memo_->visibility(index) : 1.0f;
+      if (need_occlusion && frame_.measured_updates) {
+        updates_->measureOnce(entry, [&](StereoVoxelUpdate* update, float* inside_cap) {
+          measureUpdate(index, update, inside_cap);
+        });
+      }
       current_.push_back({index, entry, occlusion, measured_visibility});
     }
     return current_.back();
+  }
+
+  // measured_prior: a never-observed voxel's prior of Eq. 4-6 from the frame's measurement, where
+  // it says less than unknown_occupancy. measured_inside: P(I_v) of Eq. 8 at most P(the measured
+  // surface lies in front of the voxel's back).
+  void measureUpdate(const VoxelIndex& index, StereoVoxelUpdate* update, float* inside_cap) {
+    *inside_cap = std::numeric_limits<float>::infinity();
+    const MeasurementMemo::Reading& reading = memo_->readingOf(index);
+    if (!reading.says()) return;
+    const VisibilityStereoConfig& config = frame_.config;
+    if (config.measured_inside) *inside_cap = reading.behind_back;
+    if (config.measured_prior && std::isnan(snapshot_->logOdds(index))) {
+      update->prior = std::min(static_cast<float>(config.unknown_occupancy), reading.in_front);
+    }
   }
 
   // measured_visibility: at most the frame's own visibility of the voxel (q_max counts as 1).
@@ -528,33 +583,6 @@ class RayCaster {
   RayCounters counters_;
 };
 
-// measured_prior: the prior of Eq. 4-6 of each never-observed voxel from the frame's
-// measurement, where the measurement says less than unknown_occupancy. measured_inside: P(I_v)
-// of Eq. 8 at most P(the measured surface lies in front of the voxel's back).
-void applyMeasurement(const VoxelMap& map, const FrameMeasurement& measurement,
-                      const VisibilityStereoConfig& config, int threads,
-                      std::vector<StereoVoxelUpdate>* updates) {
-  const long count = static_cast<long>(updates->size());
-#pragma omp parallel num_threads(threads)
-  {
-    MapSnapshot snapshot(map);
-#pragma omp for schedule(static)
-    for (long i = 0; i < count; ++i) {
-      StereoVoxelUpdate& update = (*updates)[i];
-      FrameMeasurement::Depth depth;
-      if (!measurement.depthOf(update.index, &depth)) continue;
-      if (config.measured_inside) {
-        const double p_back = depth.surfaceInFront(measurement.face_offset, *measurement.phi);
-        update.p_inside = static_cast<float>(std::min<double>(update.p_inside, p_back));
-      }
-      if (config.measured_prior && std::isnan(snapshot.logOdds(update.index))) {
-        const double p_measured = depth.surfaceInFront(0.0, *measurement.phi);
-        update.prior = static_cast<float>(std::min(config.unknown_occupancy, p_measured));
-      }
-    }
-  }
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -609,9 +637,15 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
                                     config_.measured_fuse_known,
                                     map.minLogOdds(),
                                     map.maxLogOdds()};
-  const FrameContext frame{
-      config_,    phi_,       sensor_origin, map.indexOf(sensor_origin),
-      resolution, neighbours, measurement,   measured && config_.measured_visibility};
+  const FrameContext frame{config_,
+                           phi_,
+                           sensor_origin,
+                           map.indexOf(sensor_origin),
+                           resolution,
+                           neighbours,
+                           measurement,
+                           measured && config_.measured_visibility,
+                           measured && (config_.measured_prior || config_.measured_inside)};
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
   std::size_t skipped = 0;
   std::vector<BundledRay> bundles;
@@ -678,14 +712,12 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     invisible += caster.counters().rays_invisible;
   }
   for (int t = 1; t < threads; ++t) per_thread[0].merge(per_thread[t], frame.origin_voxel);
+  per_thread[0].capInside();
   *updates = std::move(per_thread[0].entries());
   // A voxel looked up where the visibility fell below q_min was entered but never updated.
   updates->erase(std::remove_if(updates->begin(), updates->end(),
                                 [](const StereoVoxelUpdate& u) { return !(u.visibility > 0); }),
                  updates->end());
-  if (measured && (config_.measured_prior || config_.measured_inside)) {
-    applyMeasurement(map, measurement, config_, threads, updates);
-  }
   stats.skipped_points = skipped;
   stats.rays = config_.bundle_rays ? bundles.size() : point_count - skipped;
   stats.merged_points = stats.points - skipped - stats.rays;
