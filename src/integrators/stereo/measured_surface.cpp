@@ -164,8 +164,6 @@ int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const Ster
                                  const MeasuredSurfaceConfig& config,
                                  const SurfaceGridScale& scale) {
   if (!(config.grid_footprint_fraction > 0 && scale.voxel_size_m > 0)) return config.grid_step_px;
-  // The smallest disparity the rays use, on the wide windows' sample lattice: the farthest depth,
-  // where a voxel's image is smallest: f r / z = r d / b px for z = f b / d.
   float smallest = std::numeric_limits<float>::infinity();
   const int sample = config.sample_step_px;
   for (int v = 0; v < disparity.height; v += sample) {
@@ -174,7 +172,17 @@ int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const Ster
       if (isValidDisparity(d) && d >= scale.min_disparity_px) smallest = std::min(smallest, d);
     }
   }
+  return gridStepForSmallest(smallest, camera, config, scale);
+}
+
+int MeasuredSurface::gridStepForSmallest(float smallest, const StereoCamera& camera,
+                                         const MeasuredSurfaceConfig& config,
+                                         const SurfaceGridScale& scale) {
+  // smallest: the smallest disparity the rays use, on the wide windows' sample lattice: the
+  // farthest depth, where a voxel's image is smallest: f r / z = r d / b px for z = f b / d.
+  if (!(config.grid_footprint_fraction > 0 && scale.voxel_size_m > 0)) return config.grid_step_px;
   if (!std::isfinite(smallest)) return config.grid_step_px;
+  const int sample = config.sample_step_px;
   const double focal_baseline = camera.fx * camera.baseline;
   if (scale.max_range_m > 0)
     smallest = std::max<float>(smallest, focal_baseline / scale.max_range_m);
@@ -185,47 +193,27 @@ int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const Ster
   return std::max(config.grid_step_px, std::min(widest, step));
 }
 
-MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
-                                 const Eigen::Isometry3d& T_map_camera,
-                                 const MeasuredSurfaceConfig& config, const SurfaceGridScale& scale)
-    : T_camera_map_(T_map_camera.inverse()),
-      fx_(camera.fx),
-      fy_(camera.fy),
-      cx_(camera.cx),
-      cy_(camera.cy),
-      focal_baseline_(camera.fx * camera.baseline),
-      width_(disparity.width),
-      height_(disparity.height) {
-  config.validate();
-  disparity.validate();
-  step_ = gridStepFor(disparity, camera, config, scale);
-  columns_ = (width_ - 1) / step_ + 1;
-  rows_ = (height_ - 1) / step_ + 1;
-  cells_.assign(static_cast<std::size_t>(columns_) * rows_, kNoSurface);
-  measureNodes(disparity, config);
-  extendByOneNode();
-  findSteps(config.step_px);
-}
-
-namespace {
-
 // The pixels every sample_step px, with `pad` NaN samples around, so that a window reaching past
 // the image needs no bounds checks: the wide windows of all grid nodes read this one lattice.
-class SampleLattice {
+class MeasuredSurface::SampleLattice {
  public:
   // extra: lattice points past the image's last column that a read may reach (the lanes past
-  // the last grid point), NaN as the padding.
-  SampleLattice(const DisparityImageView& image, int step, int pad, int extra)
+  // the last grid point), NaN as the padding. smallest(): the smallest sample at least
+  // `least` (gridStepFor's scan, in the same pass).
+  SampleLattice(const DisparityImageView& image, int step, int pad, int extra, double least)
       : pad_(pad), columns_((image.width - 1) / step + 1 + 2 * pad + extra) {
     const int rows = (image.height - 1) / step + 1 + 2 * pad;
     samples_.assign(static_cast<std::size_t>(columns_) * rows, kNoSurface);
     for (int j = 0; j * step < image.height; ++j) {
       for (int i = 0; i * step < image.width; ++i) {
         const float d = image.at(i * step, j * step);
-        if (isValidDisparity(d)) samples_[index(i, j)] = d;
+        if (!isValidDisparity(d)) continue;
+        samples_[index(i, j)] = d;
+        if (d >= least) smallest_ = std::min(smallest_, d);
       }
     }
   }
+  float smallest() const { return smallest_; }  // +inf: none
   // The means of the point-symmetric sample pairs within `reach` samples, and the centre
   // sample, about the lattice points (i + l * stride, j) of the lanes l: NaN where a sample is
   // missing, one row of `rows` (2 reach (reach + 1) + 1 of them) a pair.
@@ -277,9 +265,35 @@ class SampleLattice {
   }
   int pad_, columns_;
   std::vector<float> samples_;
+  float smallest_ = std::numeric_limits<float>::infinity();
 };
 
-}  // namespace
+MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
+                                 const Eigen::Isometry3d& T_map_camera,
+                                 const MeasuredSurfaceConfig& config, const SurfaceGridScale& scale)
+    : T_camera_map_(T_map_camera.inverse()),
+      fx_(camera.fx),
+      fy_(camera.fy),
+      cx_(camera.cx),
+      cy_(camera.cy),
+      focal_baseline_(camera.fx * camera.baseline),
+      width_(disparity.width),
+      height_(disparity.height) {
+  config.validate();
+  disparity.validate();
+  // Padded for the lanes past a row's last node at the widest grid step (window_px).
+  const int sample = config.sample_step_px;
+  const SampleLattice lattice(disparity, sample, (config.window_px / 2) / sample,
+                              (MedianNetwork::kLanes - 1) * (config.window_px / sample),
+                              scale.min_disparity_px);
+  step_ = gridStepForSmallest(lattice.smallest(), camera, config, scale);
+  columns_ = (width_ - 1) / step_ + 1;
+  rows_ = (height_ - 1) / step_ + 1;
+  cells_.assign(static_cast<std::size_t>(columns_) * rows_, kNoSurface);
+  measureNodes(disparity, lattice, config);
+  extendByOneNode();
+  findSteps(config.step_px);
+}
 
 namespace {
 
@@ -301,11 +315,11 @@ void forEachRow(int rows, Row&& row) {
 }  // namespace
 
 void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
+                                   const SampleLattice& lattice,
                                    const MeasuredSurfaceConfig& config) {
   constexpr int kLanes = MedianNetwork::kLanes;
   const int reach = (config.window_px / 2) / config.sample_step_px;
   const int stride = step_ / config.sample_step_px;  // lattice points from one node to the next
-  const SampleLattice lattice(disparity, config.sample_step_px, reach, (kLanes - 1) * stride);
   const int per_side = 2 * reach + 1;
   const int pairs = 2 * reach * (reach + 1) + 1;  // pair means and the centre
   const int needed = static_cast<int>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
@@ -405,16 +419,16 @@ void MeasuredSurface::extendByOneNode() {
   cells_ = std::move(extended);
 }
 
-bool MeasuredSurface::isStep(int i, int j, int di, int dj, double step_px) const {
-  // The edge from node (i, j) to (i + di, j + dj) against the edges before and after it: a step
-  // where it differs from every one of them that has both ends, and at least one has. Without
-  // branches on the cells: holes and steps come in no order a predictor could learn.
-  const double first = cellAt(i, j), second = cellAt(i + di, j + dj);
+namespace {
+
+// The grid edge from `first` to `second` against the edges before and after it along its line:
+// a step where it differs from every one of them that has both ends, and at least one has.
+// Without branches on the cells (holes and steps come in no order a predictor could learn), so
+// that a line's edges vectorise. A missing node is NaN: an edge without both ends is no step
+// and compares with nothing.
+inline std::uint8_t stepBetween(double before, double first, double second, double after,
+                                double step_px) {
   const double change = second - first;
-  const bool has_before = i - di >= 0 && j - dj >= 0;
-  const bool has_after = i + 2 * di < columns_ && j + 2 * dj < rows_;
-  const double before = has_before ? cellAt(i - di, j - dj) : kNoSurface;
-  const double after = has_after ? cellAt(i + 2 * di, j + 2 * dj) : kNoSurface;
   const bool before_compared = before == before, after_compared = after == after;  // not NaN
   const bool differs_before = std::abs(change - (first - before)) > step_px;
   const bool differs_after = std::abs(change - (after - second)) > step_px;
@@ -422,26 +436,41 @@ bool MeasuredSurface::isStep(int i, int j, int di, int dj, double step_px) const
          (!after_compared | differs_after);
 }
 
+}  // namespace
+
 void MeasuredSurface::findSteps(double step_px) {
   steps_.assign(cells_.size(), 0);
-  if (!(step_px > 0)) return;
-  // Each grid edge once (a cell has four, and each borders two cells): from node (i, j) along its
-  // row and along its column.
-  std::vector<std::uint8_t> along_row(cells_.size(), 0), along_column(cells_.size(), 0);
-  forEachRow(rows_, [&](int j) {
-    for (int i = 0; i < columns_; ++i) {
-      if (std::isnan(cellAt(i, j))) continue;  // no step at an edge without both ends
-      if (i + 1 < columns_) along_row[linear(i, j)] = isStep(i, j, 1, 0, step_px);
-      if (j + 1 < rows_) along_column[linear(i, j)] = isStep(i, j, 0, 1, step_px);
+  if (!(step_px > 0) || rows_ < 2) return;
+  const int rows = rows_;
+  const std::vector<float> missing_row(columns_, kNoSurface);
+  auto row = [&](int j) { return j >= 0 && j < rows ? &cells_[linear(0, j)] : missing_row.data(); };
+  // Each cell (i, j) in one pass over its row: the edges along its two rows and its two columns,
+  // each row's edges found for both cells they border.
+  forEachRow(rows - 1, [&](int j) {
+    // A local, not the member: the byte stores below may alias any memory, and a loop bound
+    // re-read after every store does not vectorise.
+    const int columns = columns_;
+    std::vector<float> padded(columns + 3, kNoSurface);  // a row with a missing node each side
+    std::vector<std::uint8_t> along_rows(2 * columns), along_columns(columns);
+    for (int k = 0; k < 2; ++k) {
+      std::copy(row(j + k), row(j + k) + columns, padded.begin() + 1);
+      const float* line = padded.data();
+      std::uint8_t* edges = along_rows.data() + k * columns;
+      for (int i = 0; i + 1 < columns; ++i) {
+        edges[i] = stepBetween(line[i], line[i + 1], line[i + 2], line[i + 3], step_px);
+      }
     }
-  });
-  forEachRow(rows_ - 1, [&](int j) {
-    for (int i = 0; i < columns_ - 1; ++i) {
-      const bool corners = !std::isnan(cellAt(i, j)) && !std::isnan(cellAt(i + 1, j)) &&
-                           !std::isnan(cellAt(i, j + 1)) && !std::isnan(cellAt(i + 1, j + 1));
-      steps_[linear(i, j)] =
-          corners && (along_row[linear(i, j)] | along_row[linear(i, j + 1)] |
-                      along_column[linear(i, j)] | along_column[linear(i + 1, j)]);
+    const float *before = row(j - 1), *first = row(j), *second = row(j + 1), *after = row(j + 2);
+    std::uint8_t* down = along_columns.data();
+    for (int i = 0; i < columns; ++i) {
+      down[i] = stepBetween(before[i], first[i], second[i], after[i], step_px);
+    }
+    const std::uint8_t *top = along_rows.data(), *bottom = top + columns;
+    std::uint8_t* cell_steps = &steps_[linear(0, j)];
+    for (int i = 0; i + 1 < columns; ++i) {
+      const bool corners = (first[i] == first[i]) & (first[i + 1] == first[i + 1]) &
+                           (second[i] == second[i]) & (second[i + 1] == second[i + 1]);
+      cell_steps[i] = corners & (top[i] | bottom[i] | down[i] | down[i + 1]);
     }
   });
 }

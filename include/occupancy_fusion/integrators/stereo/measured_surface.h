@@ -101,10 +101,15 @@ class MeasuredSurface {
   float cellAt(int i, int j) const { return cells_[linear(i, j)]; }
   double disparityAt(double u, double v) const;  // interpolated over the grid, or NaN
 
-  void measureNodes(const DisparityImageView& disparity, const MeasuredSurfaceConfig& config);
+  class SampleLattice;  // the wide windows' samples of the image (measured_surface.cpp)
+  // gridStepFor, given the smallest disparity of its scan.
+  static int gridStepForSmallest(float smallest, const StereoCamera& camera,
+                                 const MeasuredSurfaceConfig& config,
+                                 const SurfaceGridScale& scale);
+  void measureNodes(const DisparityImageView& disparity, const SampleLattice& lattice,
+                    const MeasuredSurfaceConfig& config);
   void extendByOneNode();
   void findSteps(double step_px);
-  bool isStep(int i, int j, int di, int dj, double step_px) const;
 
   Eigen::Isometry3d T_camera_map_ = Eigen::Isometry3d::Identity();
   double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0, focal_baseline_ = 0;
