@@ -6,7 +6,8 @@
 # patches, two laser scanners at 40 Hz, tf at 120 Hz; stereo matching is not part of it), with
 # projected_map and the markers subscribed. scripts/robot_budget_monitor.py measures after a
 # warm-up: per sensor the frames sent, integrated and dropped, and the latency from each frame's
-# stamp to the first projected_map that holds it (projected_map_stamps), in the bag's time; the
+# stamp to the first projected_map that holds it (projected_map_stamps), in the bag's time, and
+# per sensor that latency split into the player's lag and the mapping's share; the
 # mapping manager's and the player's CPU share of the cores. Writes robot_budget.csv (per 5 s
 # window), robot_budget.txt (the summary) and robot_budget.png (scripts/robot_budget_plot.py).
 # (The Simulator nodelet renders these sensors at about 11 Hz on two cores: too slow to feed
@@ -99,7 +100,10 @@ player=$!
 echo "robot budget: measuring for $duration s (after $warmup s of warm-up) into $out" >&2
 python3 "$root/scripts/robot_budget_monitor.py" --duration "$duration" --warmup "$warmup" \
   --player-pid "$player" --bag "$bag" --topic /camera/depth/image --topic /stereo/disparity \
-  --topic /scan_front --topic /scan_rear --csv "$out/robot_budget.csv" \
+  --topic /scan_front --topic /scan_rear --lag-topic /scan_front --lag-topic /scan_rear \
+  --lag-topic /camera/depth/image=/camera/depth/camera_info \
+  --lag-topic /stereo/disparity=/stereo/left/camera_info \
+  --csv "$out/robot_budget.csv" \
   --summary "$out/robot_budget.txt"
 python3 "$root/scripts/robot_budget_plot.py" "$out/robot_budget.csv" "$out/robot_budget.png"
 echo "robot budget: $out/robot_budget.txt, $out/robot_budget.csv, $out/robot_budget.png"

@@ -13,11 +13,19 @@ at 100 Hz without rounding the latencies to its period. (Images received in Pyth
 /clock delivered to every node took about a third of 2 cores before.) A latency is that bag time
 at the grid's arrival minus the frame's stamp.
 
+That latency includes what the graph adds before any mapper sees a frame: the player's lag
+behind its own /clock and the transport. For the topics given as --lag-topic this node also
+receives each frame, or a small message the bag holds beside it with the same stamp (an image's
+camera_info: TOPIC=PROXY), and splits the latency: the player's lag (the arrival here, in the
+bag's time, minus the stamp) and the mapping's share (the grid's arrival minus the frame's, both
+on this node's wall clock).
+
 Writes a CSV with one row per window (--window s): per topic the frames sent, the median and the
 99th percentile latency of the frames stamped in it; the processes' CPU share. Prints a summary.
 
 Usage: robot_budget_monitor.py --duration S --warmup S --csv FILE --summary FILE
        --player-pid PID --bag BAG [--manager NAME] --topic TOPIC [--topic TOPIC]...
+       [--lag-topic TOPIC[=PROXY]]...
 """
 
 import argparse
@@ -71,13 +79,20 @@ def sent_stamps(bag_path, topics):
 
 
 class Recorder:
-    """The grids' arrivals with what each held, and the player's clock offset."""
+    """The grids' arrivals with what each held, the player's clock offset and the arrivals of the
+    lag topics' frames."""
 
-    def __init__(self):
+    def __init__(self, lag_topics=()):
+        """lag_topics: (sensor topic, the topic received here for its frames' arrivals)."""
         self.lock = threading.Lock()
         self.offset = None  # wall - bag time, its smallest sample
         self.grids = []  # (bag time of arrival, {topic: newest stamp held})
+        # sensor topic: {stamp: wall arrival}
+        self.frame_arrivals = {topic: {} for topic, _ in lag_topics}
         self.diagnostics = Diagnostics()
+        for topic, received in lag_topics:
+            rospy.Subscriber(received, rospy.AnyMsg, self.on_frame, callback_args=topic,
+                             queue_size=100)
         rospy.Subscriber("/clock", Clock, self.on_clock, queue_size=10)
         rospy.Subscriber("projected_map_stamps", IntegratedStamps, self.on_grid, queue_size=50)
         # The outputs a planner and rviz read, watched so that the MapServer builds them.
@@ -97,6 +112,12 @@ class Recorder:
         if offset is None:  # before the first /clock: the ROS clock, rounded to its period
             return rospy.get_rostime().to_sec()
         return (time.time() if wall is None else wall) - offset
+
+    def on_frame(self, message, topic):
+        arrival = time.time()
+        stamp = header_stamp(message._buff)
+        with self.lock:
+            self.frame_arrivals[topic].setdefault(stamp, arrival)
 
     def on_grid(self, message):
         arrival = time.time()
@@ -122,6 +143,40 @@ def latencies(sent, grids, topic):
     return result
 
 
+def lag_lines(recorder, grids, sent, lag_topics):
+    """Per lag topic: the player's lag (the frames' arrival here, in the bag's time, minus their
+    stamps) and the mapping's share of the latency (the grid's arrival minus the frame's, both on
+    this node's wall clock), over the frames sent in the measured time."""
+    lines, all_shares = [], []
+    for topic in lag_topics:
+        with recorder.lock:
+            arrivals = dict(recorder.frame_arrivals[topic])
+        grid_of = latencies(sent.get(topic, []), grids, topic)
+        lags, shares = [], []
+        for stamp in sent.get(topic, []):
+            if stamp not in arrivals:
+                continue
+            lag = recorder.bag_time(arrivals[stamp]) - stamp
+            lags.append(lag)
+            if grid_of.get(stamp) is not None:
+                shares.append(grid_of[stamp] - lag)
+        all_shares += shares
+        if not lags:
+            lines.append("%s: no frame received here" % topic)
+            continue
+        lines.append("%s: player's lag (stamp to arrival at a plain subscriber) median %.1f ms, "
+                     "p99 %.1f ms; mapping's share (arrival to grid) median %s ms, p99 %s ms; "
+                     "%d of %d frames received here" % (
+                         topic, 1e3 * percentile(lags, 0.5), 1e3 * percentile(lags, 0.99),
+                         "-" if not shares else "%.1f" % (1e3 * percentile(shares, 0.5)),
+                         "-" if not shares else "%.1f" % (1e3 * percentile(shares, 0.99)),
+                         len(lags), len(sent.get(topic, []))))
+    if all_shares:
+        lines.append("mapping's share, every frame received here: median %.1f ms, p99 %.1f ms" % (
+            1e3 * percentile(all_shares, 0.5), 1e3 * percentile(all_shares, 0.99)))
+    return lines
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--duration", type=float, required=True, help="s measured")
@@ -132,12 +187,19 @@ def main():
     parser.add_argument("--bag", required=True, help="the bag played (the frames sent)")
     parser.add_argument("--topic", action="append", required=True,
                         help="a sensor topic (resolved name); repeat for each")
+    parser.add_argument("--lag-topic", action="append", default=[],
+                        help="TOPIC[=PROXY]: a sensor topic whose frames (or PROXY's messages "
+                        "of the same stamps, such as its camera_info) are received here too, to "
+                        "split its latency into the player's lag and the mapping's share; repeat "
+                        "for each")
     parser.add_argument("--csv", required=True)
     parser.add_argument("--summary", required=True)
     args = parser.parse_args(rospy.myargv()[1:])
 
     rospy.init_node("robot_budget_monitor", disable_signals=True)
-    recorder = Recorder()
+    lag_topics = [tuple(entry.split("=", 1)) if "=" in entry else (entry, entry)
+                  for entry in args.lag_topic]
+    recorder = Recorder(lag_topics)
     manager_pid, player_pid = node_pid(args.manager, "/robot_budget_monitor"), args.player_pid
     cores = os.cpu_count()
     time.sleep(args.warmup)
@@ -222,6 +284,7 @@ def main():
                         delta["frames dropped"], dropped or "",
                         after.get("integration ms (mean)", "-"),
                         after.get("integration ms (max)", "-")))
+    lines += lag_lines(recorder, grids, sent, [topic for topic, _ in lag_topics])
     lines.append("all sensors: latency median %.1f ms, p99 %.1f ms" % (
         1e3 * percentile(all_latencies, 0.5), 1e3 * percentile(all_latencies, 0.99))
         if all_latencies else "all sensors: no frame reached a published grid")
