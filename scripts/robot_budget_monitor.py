@@ -8,8 +8,11 @@ machine's cores.
 The measurement keeps off the cores it measures: the frames sent are read from the bag after the
 run (the stamps in each message's std_msgs/Header, read from the raw bytes) rather than by
 subscribing to the images here, and the bag's time comes from this node's wall clock less the
-player's offset, the smallest (wall arrival - /clock) seen, so that the player's /clock may run
-at 100 Hz without rounding the latencies to its period. (Images received in Python and a 1 kHz
+player's offset, the smallest (wall arrival - /clock) seen once the player has settled (from
+the last second of the warm-up on), so that the player's /clock may run at 100 Hz without
+rounding the latencies to its period. (The player's first /clock messages run up to 100 ms ahead
+of its later ones: the smallest offset over the whole run took one of them, and every latency
+was 100 ms too long.) (Images received in Python and a 1 kHz
 /clock delivered to every node took about a third of 2 cores before.) A latency is that bag time
 at the grid's arrival minus the frame's stamp.
 
@@ -85,7 +88,9 @@ class Recorder:
     def __init__(self, lag_topics=()):
         """lag_topics: (sensor topic, the topic received here for its frames' arrivals)."""
         self.lock = threading.Lock()
-        self.offset = None  # wall - bag time, its smallest sample
+        self.offset = None  # wall - bag time, its smallest sample since settle()
+        self.startup_offset = None  # the same before settle(), for the bag's time until then
+        self.settled = False
         self.grids = []  # (bag time of arrival, {topic: newest stamp held})
         # sensor topic: {stamp: wall arrival}
         self.frame_arrivals = {topic: {} for topic, _ in lag_topics}
@@ -102,13 +107,21 @@ class Recorder:
     def on_clock(self, message):
         offset = time.time() - message.clock.to_sec()
         with self.lock:
-            if self.offset is None or offset < self.offset:
+            if not self.settled:
+                if self.startup_offset is None or offset < self.startup_offset:
+                    self.startup_offset = offset
+            elif self.offset is None or offset < self.offset:
                 self.offset = offset
+
+    def settle(self):
+        """Takes the player's offset from the /clock messages arriving from now on."""
+        with self.lock:
+            self.settled = True
 
     def bag_time(self, wall=None):
         """The bag's time at a wall time (now by default)."""
         with self.lock:
-            offset = self.offset
+            offset = self.offset if self.offset is not None else self.startup_offset
         if offset is None:  # before the first /clock: the ROS clock, rounded to its period
             return rospy.get_rostime().to_sec()
         return (time.time() if wall is None else wall) - offset
@@ -202,7 +215,9 @@ def main():
     recorder = Recorder(lag_topics)
     manager_pid, player_pid = node_pid(args.manager, "/robot_budget_monitor"), args.player_pid
     cores = os.cpu_count()
-    time.sleep(args.warmup)
+    time.sleep(max(0.0, args.warmup - 1.0))
+    recorder.settle()
+    time.sleep(min(1.0, args.warmup))
     start = time.time()
     ros_start = recorder.bag_time()
     start_counts = {task: recorder.counts(task) for task in TASKS.values()}
