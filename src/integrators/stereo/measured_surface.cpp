@@ -160,21 +160,6 @@ void localPairsOfLanes(const DisparityImageView& image, int u, int step, int v, 
 
 }  // namespace
 
-int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const StereoCamera& camera,
-                                 const MeasuredSurfaceConfig& config,
-                                 const SurfaceGridScale& scale) {
-  if (!(config.grid_footprint_fraction > 0 && scale.voxel_size_m > 0)) return config.grid_step_px;
-  float smallest = std::numeric_limits<float>::infinity();
-  const int sample = config.sample_step_px;
-  for (int v = 0; v < disparity.height; v += sample) {
-    for (int u = 0; u < disparity.width; u += sample) {
-      const float d = disparity.at(u, v);
-      if (isValidDisparity(d) && d >= scale.min_disparity_px) smallest = std::min(smallest, d);
-    }
-  }
-  return gridStepForSmallest(smallest, camera, config, scale);
-}
-
 int MeasuredSurface::gridStepForSmallest(float smallest, const StereoCamera& camera,
                                          const MeasuredSurfaceConfig& config,
                                          const SurfaceGridScale& scale) {
@@ -267,6 +252,13 @@ class MeasuredSurface::SampleLattice {
   std::vector<float> samples_;
   float smallest_ = std::numeric_limits<float>::infinity();
 };
+
+int MeasuredSurface::gridStepFor(const DisparityImageView& disparity, const StereoCamera& camera,
+                                 const MeasuredSurfaceConfig& config,
+                                 const SurfaceGridScale& scale) {
+  const SampleLattice lattice(disparity, config.sample_step_px, 0, 0, scale.min_disparity_px);
+  return gridStepForSmallest(lattice.smallest(), camera, config, scale);
+}
 
 MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const StereoCamera& camera,
                                  const Eigen::Isometry3d& T_map_camera,
