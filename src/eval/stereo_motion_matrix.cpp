@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/sim/scenes.h"
@@ -39,6 +41,29 @@ std::vector<StereoMotionCase> stereoAisleMotions() {
           {motionName("aisle_backward", 0.10), StereoMotion::kAisleBackward, 0.10}};
 }
 
+namespace {
+
+// The step of `name` = kind + "_" + step + unit, where the step is a positive number; false where
+// the name is not of that form.
+bool parseStep(const std::string& name, const std::string& kind, const std::string& unit,
+               double* step) {
+  const std::string prefix = kind + "_";
+  if (name.size() <= prefix.size() + unit.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - unit.size(), unit.size(), unit) != 0) {
+    return false;
+  }
+  const std::string number = name.substr(prefix.size(), name.size() - prefix.size() - unit.size());
+  std::size_t used = 0;
+  try {
+    *step = std::stod(number, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return used == number.size() && std::isfinite(*step) && *step > 0;
+}
+
+}  // namespace
+
 StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
   std::string known;
   std::vector<StereoMotionCase> motions = stereoMatrixMotions();
@@ -47,7 +72,20 @@ StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
     if (motion.name == name) return motion;
     known += (known.empty() ? "" : ", ") + motion.name;
   }
-  throw std::invalid_argument("unknown motion '" + name + "' (known: " + known + ")");
+  // The same motions at other speeds: the kind's name and its step per frame.
+  const std::pair<const char*, StereoMotion> kinds[] = {
+      {"forward", StereoMotion::kForward},        {"sideways", StereoMotion::kSideways},
+      {"aisle_curve", StereoMotion::kAisleCurve}, {"aisle_diagonal", StereoMotion::kAisleDiagonal},
+      {"aisle_fast", StereoMotion::kAisleFast},   {"aisle_backward", StereoMotion::kAisleBackward}};
+  double step = 0.0;
+  for (const auto& [kind, motion] : kinds) {
+    if (parseStep(name, kind, "", &step)) return {name, motion, step};
+  }
+  if (parseStep(name, "turn", "deg", &step)) return {name, StereoMotion::kTurn, step};
+  throw std::invalid_argument("unknown motion '" + name + "' (known: " + known +
+                              "; other steps: forward_<m>, sideways_<m>, turn_<deg>deg, "
+                              "aisle_curve_<m>, aisle_diagonal_<m>, aisle_fast_<m>, "
+                              "aisle_backward_<m>, per frame)");
 }
 
 bool StereoMotionSetup::isAisle() const {

@@ -97,6 +97,17 @@ TEST(StereoMotionMatrixTest, MotionNames) {
   EXPECT_EQ(stereoMotionCaseFromName("turn_5deg").motion, StereoMotion::kTurn);
   EXPECT_DOUBLE_EQ(stereoMotionCaseFromName("forward_0.20").step, 0.2);
   EXPECT_THROW(stereoMotionCaseFromName("backward"), std::invalid_argument);
+  // Other speeds of the same motions.
+  const StereoMotionCase faster = stereoMotionCaseFromName("forward_0.35");
+  EXPECT_EQ(faster.motion, StereoMotion::kForward);
+  EXPECT_DOUBLE_EQ(faster.step, 0.35);
+  EXPECT_DOUBLE_EQ(stereoMotionCaseFromName("turn_12.5deg").step, 12.5);
+  EXPECT_EQ(stereoMotionCaseFromName("aisle_curve_0.25").motion, StereoMotion::kAisleCurve);
+  EXPECT_EQ(stereoMotionCaseFromName("aisle_backward_0.2").motion, StereoMotion::kAisleBackward);
+  for (const char* bad : {"forward_", "forward_-0.1", "forward_0", "forward_0.1x", "turn_5",
+                          "turn_deg", "sideways_nan", "aisle_0.1"}) {
+    EXPECT_THROW(stereoMotionCaseFromName(bad), std::invalid_argument) << bad;
+  }
   // Poses: forward moves 0.1 m per frame along +x, standing stays.
   StereoMotionSetup setup;
   setup.motion = stereoMotionCaseFromName("forward_0.10");
