@@ -89,15 +89,38 @@ class FrameBlockTable {
  private:
   Value* values(const BlockIndex& block, const BlockIndex& origin_block) {
     if (last_ != nullptr && block == last_block_) return last_;
-    const auto [it, inserted] = block_numbers_.try_emplace(
-        packKey(BlockIndex(block - origin_block)), static_cast<std::uint32_t>(blocks_.size()));
-    if (inserted) blocks_.emplace_back().fill(initial_);
+    const BlockIndex offset = block - origin_block;
+    std::uint32_t* number = nullptr;
+    if ((offset.array().abs() < kNearReach).all()) {
+      number = &near_numbers_[nearSlot(offset)];
+      if (*number == kNone) *number = newBlock();
+    } else {
+      const auto [it, inserted] = block_numbers_.try_emplace(packKey(offset), 0u);
+      if (inserted) it.value() = newBlock();
+      number = &it.value();
+    }
     last_block_ = block;
-    last_ = blocks_[it->second].data();
+    last_ = blocks_[*number].data();
     return last_;
+  }
+  std::uint32_t newBlock() {
+    blocks_.emplace_back().fill(initial_);
+    return static_cast<std::uint32_t>(blocks_.size() - 1);
+  }
+  // Blocks within kNearReach - 1 of the origin's block, along every axis, are numbered in a dense
+  // cube: most of a frame's block look-ups without a hash.
+  static constexpr int kNearReach = 8, kNearEdge = 2 * kNearReach - 1;
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  static std::size_t nearSlot(const BlockIndex& offset) {
+    return (static_cast<std::size_t>(offset.z() + kNearReach - 1) * kNearEdge +
+            (offset.y() + kNearReach - 1)) *
+               kNearEdge +
+           (offset.x() + kNearReach - 1);
   }
 
   Value initial_;
+  std::vector<std::uint32_t> near_numbers_ =
+      std::vector<std::uint32_t>(kNearEdge * kNearEdge * kNearEdge, kNone);
   SpatialKeyMap<std::uint32_t> block_numbers_;                 // block key -> position in blocks_
   std::deque<std::array<Value, VoxelBlock::kVolume>> blocks_;  // growing it moves no array
   BlockIndex last_block_ = BlockIndex::Zero();
@@ -113,42 +136,40 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
  public:
   void reserve(std::size_t voxels) {
     entries_.reserve(voxels);
-    occlusions_.reserve(voxels);
-    inside_caps_.reserve(voxels);
+    readings_.reserve(voxels);
   }
   std::uint32_t findOrInsert(const VoxelIndex& index, const VoxelIndex& origin) {
     std::uint32_t& slot = slots_.at(index, VoxelMap::blockOf(origin));
     if (slot == kNoEntry) {
       slot = static_cast<std::uint32_t>(entries_.size());
       entries_.push_back({index, 0.0f, 0.0f});
-      occlusions_.push_back(kNotComputed);
-      inside_caps_.push_back(kNotComputed);
+      readings_.push_back({kNotComputed, kNotComputed, kNotComputed});
     }
     return slot;
   }
-  // The frame's measurement of the entry's voxel, read on its first request: its prior (Eq. 4-6
-  // of a never-observed voxel) and the bound on its P(I_v), applied to the reduced value by
-  // capInside(). measure(&update, &cap) sets both.
-  template <typename Measure>
-  void measureOnce(std::uint32_t entry, Measure&& measure) {
-    float& cap = inside_caps_[entry];
-    if (std::isnan(cap)) measure(&entries_[entry], &cap);
+  // What a walk reads of the entry's voxel besides the map: each depends only on the voxel, the
+  // sensor's voxel, the map before the frame and the frame's measurement, and rays that are not
+  // neighbours (bundle_rays) reach the same voxel many times past the previous-ray cache.
+  struct Reading {
+    float occlusion;            // Eq. 1's local occlusion
+    float measured_visibility;  // the frame's own visibility of the voxel (1: none)
+    float inside_cap;           // the bound on its P(I_v), applied by capInside() (NaN: none)
+  };
+  // The entry's reading, made by read(&update, &reading) on its first request, which also sets
+  // the update's prior where the measurement gives one (Eq. 4-6 of a never-observed voxel).
+  template <typename Read>
+  const Reading& readOnce(std::uint32_t entry, Read&& read) {
+    Reading& reading = readings_[entry];
+    if (std::isnan(reading.occlusion)) read(&entries_[entry], &reading);
+    return reading;
   }
   // P(I_v) of every entry at most its measured bound: min(max over rays, bound) as the bound
   // applied after the reduction.
   void capInside() {
     for (std::size_t i = 0; i < entries_.size(); ++i) {
-      if (inside_caps_[i] < entries_[i].p_inside) entries_[i].p_inside = inside_caps_[i];
+      const float cap = readings_[i].inside_cap;
+      if (cap < entries_[i].p_inside) entries_[i].p_inside = cap;
     }
-  }
-  // Eq. 1's local occlusion of the entry's voxel, computed on its first request: it depends only
-  // on the voxel, the sensor's voxel and the map before the frame, and rays that are not
-  // neighbours (bundle_rays) reach the same voxel many times past the previous-ray cache.
-  template <typename Compute>
-  float occlusion(std::uint32_t entry, Compute&& compute) {
-    float& value = occlusions_[entry];
-    if (std::isnan(value)) value = static_cast<float>(compute());
-    return value;
   }
   // Reduction to one update per voxel: the largest P(I_v) (a hit wins over a
   // miss, as in OctoMap) and the largest visibility (see reduce()).
@@ -164,7 +185,7 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
       const std::uint32_t entry = findOrInsert(theirs.index, origin);
       if (entry >= known) {  // new here: the other thread's measurement of it (the same voxel's)
         entries_[entry].prior = theirs.prior;
-        inside_caps_[entry] = other.inside_caps_[i];
+        readings_[entry].inside_cap = other.readings_[i].inside_cap;
       }
       reduce(entry, theirs.p_inside, theirs.visibility);
     }
@@ -177,8 +198,7 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
 
   FrameBlockTable<std::uint32_t> slots_{kNoEntry};  // voxel -> its entry
   std::vector<StereoVoxelUpdate> entries_;
-  std::vector<float> occlusions_;   // per entry; kNotComputed until requested
-  std::vector<float> inside_caps_;  // per entry; kNotComputed until measured (NaN: no bound)
+  std::vector<Reading> readings_;  // per entry; occlusion kNotComputed until read
 };
 
 // Read access to the map for one thread and frame: blocks are copied once
@@ -422,22 +442,19 @@ class RayCaster {
       current_.push_back(previous_[j]);
     } else {
       const std::uint32_t entry = updates_->findOrInsert(index, frame_.origin_voxel);
-      const float occlusion =
-          need_occlusion
-              ? updates_->occlusion(entry,
-                                    [&] {
-                                      return localOcclusion(index, frame_.origin_voxel,
-                                                            frame_.neighbours, snapshot_, memo_);
-                                    })
-              : 0.0f;
-      const float measured_visibility =
-          need_occlusion && frame_.measured_visibility ? memo_->visibility(index) : 1.0f;
-      if (need_occlusion && frame_.measured_updates) {
-        updates_->measureOnce(entry, [&](StereoVoxelUpdate* update, float* inside_cap) {
-          measureUpdate(index, update, inside_cap);
-        });
+      if (!need_occlusion) {
+        current_.push_back({index, entry, 0.0f, 1.0f});
+        return current_.back();
       }
-      current_.push_back({index, entry, occlusion, measured_visibility});
+      const FrameUpdates::Reading& reading =
+          updates_->readOnce(entry, [&](StereoVoxelUpdate* update, FrameUpdates::Reading* read) {
+            read->occlusion = static_cast<float>(
+                localOcclusion(index, frame_.origin_voxel, frame_.neighbours, snapshot_, memo_));
+            read->measured_visibility =
+                frame_.measured_visibility ? memo_->visibility(index) : 1.0f;
+            if (frame_.measured_updates) measureUpdate(index, update, &read->inside_cap);
+          });
+      current_.push_back({index, entry, reading.occlusion, reading.measured_visibility});
     }
     return current_.back();
   }
