@@ -491,8 +491,39 @@ double MeasuredSurface::disparityAt(double u, double v) const {
   return d10 + (d00 - d10) * (1 - fu) + (d11 - d10) * fv;
 }
 
+double MeasuredSurface::nearestNodeWithin(double u, double v, double radius_px) const {
+  // Rings of nodes about the nearest node, outwards, until a ring lies farther than the best
+  // node found or than radius_px: the node nearest to (u, v) in the image.
+  constexpr int kMaxRings = 64;  // a footprint of 64 nodes' radius needs no finer answer
+  const double gu = u / step_, gv = v / step_, radius = radius_px / step_;
+  const int ci = static_cast<int>(std::lround(gu)), cj = static_cast<int>(std::lround(gv));
+  double best_squared = radius * radius;
+  float best = kNoSurface;
+  const int rings = std::min(kMaxRings, static_cast<int>(std::ceil(radius)) + 1);
+  for (int ring = 0; ring <= rings; ++ring) {
+    // A node of this ring lies at least ring - 0.5 nodes from (u, v) along an axis.
+    const double nearest = ring - 0.5;
+    if (nearest > 0 && nearest * nearest > best_squared) break;
+    for (int j = cj - ring; j <= cj + ring; ++j) {
+      if (j < 0 || j >= rows_) continue;
+      const bool edge_row = j == cj - ring || j == cj + ring;
+      for (int i = ci - ring; i <= ci + ring; i += edge_row ? 1 : 2 * ring) {
+        if (i < 0 || i >= columns_) continue;
+        const float node = cellAt(i, j);
+        if (std::isnan(node)) continue;
+        const double squared = (i - gu) * (i - gu) + (j - gv) * (j - gv);
+        if (squared < best_squared) {
+          best_squared = squared;
+          best = node;
+        }
+      }
+    }
+  }
+  return best;
+}
+
 bool MeasuredSurface::depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
-                              double reach_m) const {
+                              double reach_m, bool* nearest_node) const {
   if (empty()) return false;
   const Eigen::Vector3d p = T_camera_map_ * point_in_map;
   if (!(p.z() > 0)) return false;
@@ -502,8 +533,13 @@ bool MeasuredSurface::depthAt(const Eigen::Vector3d& point_in_map, double* z, do
         v <= height_ - 1 + reach_v)) {
     return false;
   }
-  const double d = disparityAt(std::clamp(u, 0.0, width_ - 1.0), std::clamp(v, 0.0, height_ - 1.0));
+  const double inside_u = std::clamp(u, 0.0, width_ - 1.0);
+  const double inside_v = std::clamp(v, 0.0, height_ - 1.0);
+  double d = disparityAt(inside_u, inside_v);
+  const bool from_node = !(d > 0);
+  if (from_node) d = nearestNodeWithin(inside_u, inside_v, std::max(reach_u, reach_v));
   if (!(d > 0)) return false;
+  if (nearest_node != nullptr) *nearest_node = from_node;
   *z = p.z();
   *z_surface = focal_baseline_ / d;
   return true;

@@ -227,6 +227,31 @@ TEST(MeasuredSurface, ReadsTheBorderPixelJustOutsideTheImageWithinTheReach) {
   EXPECT_TRUE(surface.depthAt(pointAt(-7.0, 60.0, 1.0), &z, &z_surface, 0.1));
 }
 
+TEST(MeasuredSurface, ReadsTheNearestSurfaceWithinTheReachWhereThePixelHasNone) {
+  // Columns from 100 on without disparity (beyond the matcher's range): the grid's surfaces end at
+  // the node of column 100 (extrapolated from its neighbours). A voxel whose centre projects to
+  // column 112 reads that node's surface where 12 px lie within its reach's projection.
+  const Plane plane;
+  std::vector<float> image = planeImage(plane);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 100; u < kWidth; ++u) {
+      image[static_cast<std::size_t>(v) * kWidth + u] = std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  const MeasuredSurface surface = surfaceOf(image);
+  ASSERT_EQ(surface.gridStep(), 4);
+  double z = 0, z_surface = 0;
+  EXPECT_FALSE(surface.depthAt(pointAt(112.0, 60.0, 1.0), &z, &z_surface));  // no reach
+  // 0.1 m is 6.25 px at 2 m and 12.5 px at 1 m.
+  EXPECT_FALSE(surface.depthAt(pointAt(112.0, 60.0, 2.0), &z, &z_surface, 0.1));
+  ASSERT_TRUE(surface.depthAt(pointAt(112.0, 60.0, 1.0), &z, &z_surface, 0.1));
+  EXPECT_NEAR(z, 1.0, 1e-9);
+  EXPECT_NEAR(z_surface, plane.depth(100.0, 60.0), 0.01 * plane.depth(100.0, 60.0));
+  // The nearest node, not any: from row 61.5 the node of row 60 (1.5 px) and not that of row 64.
+  ASSERT_TRUE(surface.depthAt(pointAt(111.0, 61.5, 1.0), &z, &z_surface, 0.1));
+  EXPECT_NEAR(z_surface, plane.depth(100.0, 60.0), 0.002 * plane.depth(100.0, 60.0));
+}
+
 TEST(MeasuredSurface, GridFollowsTheSmallestVoxelImage) {
   // A voxel of size r at depth z = f b / d is r d / b px wide, whatever f.
   std::vector<float> image(static_cast<std::size_t>(kWidth) * kHeight, 12.0f);

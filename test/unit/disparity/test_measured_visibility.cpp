@@ -4,7 +4,9 @@
 // analytic position, and against the paper's readings of unknown space on the same image.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -106,6 +108,44 @@ TEST(MeasuredVisibilityTest, APatchShiftedTowardsTheCameraMapsNoPhantom) {
   without_cap.measured_inside = false;
   without_cap.measured_prior = false;
   EXPECT_GE(mapOnce(without_cap, image).in_front, 4u);
+}
+
+TEST(MeasuredVisibilityTest, ASurfaceNextToAnInvalidRegionIsMappedAtOnce) {
+  // A wall 4 m ahead below the optical axis only; above it no disparity (beyond the matcher's
+  // range). The camera at 1.02 m: the voxels of the 1.0-1.1 m layer that the rays to the wall's
+  // top rows cross have their centres (1.05 m) above the axis, in the invalid half, up to 2 m out
+  // (a 0.1 m voxel is 30 px wide at 1 m here). The nearest surface in a voxel's image says that
+  // it lies well in front of the wall; read as unknown (P(O) = 0.5, Table I's reading), each such
+  // neighbour took 0.4 of a ray's visibility, and the rays stopped about 0.5 m out.
+  constexpr int kW = 320, kH = 240;
+  const StereoCamera camera{300.0, 300.0, 159.5, 119.5, 0.12};  // d = 9 px at 4 m
+  constexpr double kFarWallX = 4.0;
+  std::vector<float> image(static_cast<std::size_t>(kW) * kH,
+                           static_cast<float>(camera.fx * camera.baseline / kFarWallX));
+  std::fill(image.begin(), image.begin() + static_cast<std::size_t>(kW) * (kH / 2),
+            std::numeric_limits<float>::quiet_NaN());
+  Eigen::Isometry3d pose = cameraPose();
+  pose.translation() = Eigen::Vector3d(0.05, 0.05, 1.02);
+  VoxelMapConfig map_config;
+  map_config.resolution = kResolution;
+  VoxelMap map(map_config);
+  const DisparityImageView view{kW, kH, image.data(), 0};
+  VisibilityStereoIntegrator(kMeasured).integrate(view, camera, pose, &map);
+  // The wall's voxels (x index 40 or 41) by height layer: rows 120 to 239 see it from 1.02 m down
+  // to 0 m, 4.3 m wide (about 43 voxels).
+  std::vector<int> per_layer(11, 0);
+  std::size_t behind = 0, in_front = 0;
+  map.forEachOccupiedVoxel([&](const VoxelIndex& index, float) {
+    const double x = (index.x() + 0.5) * kResolution;
+    if (x > kFarWallX + 0.3) ++behind;
+    if (x < kFarWallX - 0.3) ++in_front;
+    if ((index.x() == 40 || index.x() == 41) && index.z() >= 0 && index.z() <= 10) {
+      ++per_layer[index.z()];
+    }
+  });
+  for (int layer = 1; layer <= 10; ++layer) EXPECT_GE(per_layer[layer], 38) << "layer " << layer;
+  EXPECT_EQ(behind, 0u);
+  EXPECT_EQ(in_front, 0u);
 }
 
 TEST(MeasuredVisibilityTest, NamesAndValidation) {

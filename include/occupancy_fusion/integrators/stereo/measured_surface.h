@@ -89,9 +89,13 @@ class MeasuredSurface {
   // (behind the camera, outside the image, no grid surface near the pixel). reach_m: a point
   // whose projection lies outside the image by at most the projection of reach_m at its depth
   // reads the surface at the nearest border pixel (a voxel that rays through the border pixels
-  // cross has its centre up to half its diagonal outside the image).
+  // cross has its centre up to half its diagonal outside the image), and one whose pixel has no
+  // surface (an invalid region: beyond the matcher's range, a hole) that of the nearest grid node
+  // within that projection: a voxel is as large in the image, and a ray through it to a pixel
+  // with a surface may have its centre's pixel in the invalid region (near the camera, a 0.2 m
+  // voxel covers tens of pixels); *nearest_node tells which.
   bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
-               double reach_m = 0.0) const;
+               double reach_m = 0.0, bool* nearest_node = nullptr) const;
   double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
   int gridStep() const { return step_; }                    // px between grid nodes
 
@@ -100,6 +104,9 @@ class MeasuredSurface {
   // The surface's disparity at grid node (i, j) (pixel (i, j) * grid_step_px), NaN where none.
   float cellAt(int i, int j) const { return cells_[linear(i, j)]; }
   double disparityAt(double u, double v) const;  // interpolated over the grid, or NaN
+  // The disparity of the grid node nearest to pixel (u, v) that has a surface, within radius_px
+  // of it; NaN where none has.
+  double nearestNodeWithin(double u, double v, double radius_px) const;
 
   class SampleLattice;  // the wide windows' samples of the image (measured_surface.cpp)
   // gridStepFor, given the smallest disparity of its scan.
