@@ -523,7 +523,7 @@ double MeasuredSurface::nearestNodeWithin(double u, double v, double radius_px) 
 }
 
 bool MeasuredSurface::depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
-                              double reach_m, bool* nearest_node) const {
+                              double reach_m) const {
   if (empty()) return false;
   const Eigen::Vector3d p = T_camera_map_ * point_in_map;
   if (!(p.z() > 0)) return false;
@@ -536,10 +536,8 @@ bool MeasuredSurface::depthAt(const Eigen::Vector3d& point_in_map, double* z, do
   const double inside_u = std::clamp(u, 0.0, width_ - 1.0);
   const double inside_v = std::clamp(v, 0.0, height_ - 1.0);
   double d = disparityAt(inside_u, inside_v);
-  const bool from_node = !(d > 0);
-  if (from_node) d = nearestNodeWithin(inside_u, inside_v, std::max(reach_u, reach_v));
+  if (!(d > 0)) d = nearestNodeWithin(inside_u, inside_v, std::max(reach_u, reach_v));
   if (!(d > 0)) return false;
-  if (nearest_node != nullptr) *nearest_node = from_node;
   *z = p.z();
   *z_surface = focal_baseline_ / d;
   return true;

@@ -260,19 +260,13 @@ struct FrameMeasurement {
       return cdf((z + offset - z_surface) / sigma);
     }
   };
-  // False where the image does not say (outside it, behind the camera, no surface near). Where
-  // the voxel's own pixel has none, the nearest surface in its image says only that the voxel
-  // lies well in front of it (its back 2 sigma in front: P(O) < 0.03): next to the range limit
-  // or a hole, where the surface itself is unknown, the space close to and behind it stays so.
+  // False where the image does not say (outside it, behind the camera, no surface near).
   bool depthOf(const VoxelIndex& voxel, Depth* depth) const {
     if (surface == nullptr) return false;
     const Eigen::Vector3d center = (voxel.cast<double>().array() + 0.5) * resolution;
-    bool nearest_node = false;
-    if (!surface->depthAt(center, &depth->z, &depth->z_surface, border_reach, &nearest_node)) {
-      return false;
-    }
+    if (!surface->depthAt(center, &depth->z, &depth->z_surface, border_reach)) return false;
     depth->sigma = std::clamp(lambda * depth->z_surface * depth->z_surface, sigma_min, sigma_max);
-    return !nearest_node || depth->z + face_offset + 2.0 * depth->sigma <= depth->z_surface;
+    return true;
   }
 };
 

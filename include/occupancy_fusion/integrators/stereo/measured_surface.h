@@ -93,9 +93,9 @@ class MeasuredSurface {
   // surface (an invalid region: beyond the matcher's range, a hole) that of the nearest grid node
   // within that projection: a voxel is as large in the image, and a ray through it to a pixel
   // with a surface may have its centre's pixel in the invalid region (near the camera, a 0.2 m
-  // voxel covers tens of pixels); *nearest_node tells which.
+  // voxel covers tens of pixels).
   bool depthAt(const Eigen::Vector3d& point_in_map, double* z, double* z_surface,
-               double reach_m = 0.0, bool* nearest_node = nullptr) const;
+               double reach_m = 0.0) const;
   double focalBaseline() const { return focal_baseline_; }  // f * b (px m): z = f b / d
   int gridStep() const { return step_; }                    // px between grid nodes
 
