@@ -299,6 +299,7 @@ const std::vector<Workload>& workloads() {
        "      [--threads T] [--clock cpu|wall] [--unknown_neighbour_occupancy P] [--rtabmap DIR]\n"
        "      [--parameter_set measured|table_i|fast_expansion] [--bundle_rays true|false]\n"
        "      [--method visibility|octomap] [--measured_grid_fraction F]\n"
+       "      [--measured_fuse_known 0|1]\n"
        "      [--picture PREFIX [--picture_scene S] [--picture_resolution R]]\n"
        "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
        "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
@@ -324,7 +325,8 @@ const std::vector<Workload>& workloads() {
         "parameter_set",
         "bundle_rays",
         "method",
-        "measured_grid_fraction"},
+        "measured_grid_fraction",
+        "measured_fuse_known"},
        runDisparity},
       {"disparity-artifacts",
        "[--part all|artifacts|fig5a|sweep|matrix] [--frames N] [--resolution R] [--fig5a_updates "
