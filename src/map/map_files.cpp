@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -14,6 +15,7 @@
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -223,13 +225,20 @@ void writeNpy(const LogOddsRaster& raster, const std::string& path) {
 
 void writePcd(const VoxelMap& map, const std::string& path, PcdEncoding encoding) {
   struct Point {
+    VoxelIndex index;
     Eigen::Vector3f center;
     float probability;
   };
   std::vector<Point> points;
   map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
-    points.push_back(
-        {map.centerOf(index).cast<float>(), static_cast<float>(probabilityFromLogOdds(log_odds))});
+    points.push_back({index, map.centerOf(index).cast<float>(),
+                      static_cast<float>(probabilityFromLogOdds(log_odds))});
+  });
+  // In voxel order (z, then y, then x), not the block table's, which follows the order in which
+  // the mappers' threads created the blocks: the same map gives the same file.
+  std::sort(points.begin(), points.end(), [](const Point& a, const Point& b) {
+    return std::tie(a.index.z(), a.index.y(), a.index.x()) <
+           std::tie(b.index.z(), b.index.y(), b.index.x());
   });
   writeFileAtomically(path, [&](std::ostream& out) {
     out << "# .PCD v0.7 - Point Cloud Data file format\n"

@@ -48,7 +48,7 @@ std::string npyFloatHeader(int rows, int columns);
 void appendLittleEndianFloats(const std::vector<float>& values, std::string* bytes);
 
 // PCD v0.7 with fields x y z probability (float32): the centre and occupancy probability of every
-// known voxel. WIDTH = number of points, HEIGHT = 1.
+// known voxel, in voxel order (z, then y, then x). WIDTH = number of points, HEIGHT = 1.
 enum class PcdEncoding { kBinary, kAscii };
 void writePcd(const VoxelMap& map, const std::string& path,
               PcdEncoding encoding = PcdEncoding::kBinary);

@@ -287,6 +287,36 @@ TEST_F(MapFiles, PcdBinaryAndAsciiParseBack) {
   }
 }
 
+// The same voxels written in another order (the mappers' threads create blocks in any order)
+// give the same file, byte for byte, with the points in voxel order.
+TEST_F(MapFiles, PcdOfTheSameMapIsTheSameFileWhateverOrderItsBlocksWereMadeIn) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> coordinate(-60, 60);
+  std::vector<VoxelUpdate> updates;
+  for (int i = 0; i < 3000; ++i) {
+    updates.push_back({{coordinate(rng), coordinate(rng), coordinate(rng) / 8}, 1.5f});
+  }
+  VoxelMap forward(mapConfig(0.1)), backward(mapConfig(0.1));
+  for (const VoxelUpdate& update : updates) forward.applyUpdates({update});
+  for (auto it = updates.rbegin(); it != updates.rend(); ++it) backward.applyUpdates({*it});
+  writePcd(forward, path("forward.pcd"), PcdEncoding::kAscii);
+  writePcd(backward, path("backward.pcd"), PcdEncoding::kAscii);
+  const std::string text = readAll(path("forward.pcd"));
+  EXPECT_EQ(text, readAll(path("backward.pcd")));
+  // The points follow z, then y, then x.
+  std::istringstream lines(text.substr(text.find("DATA ascii\n") + 11));
+  std::tuple<float, float, float> previous{-1e9f, -1e9f, -1e9f};
+  float x, y, z, probability;
+  std::size_t points = 0;
+  while (lines >> x >> y >> z >> probability) {
+    const std::tuple<float, float, float> current{z, y, x};
+    EXPECT_LT(previous, current) << x << " " << y << " " << z;
+    previous = current;
+    ++points;
+  }
+  EXPECT_EQ(points, forward.knownVoxelCount());
+}
+
 TEST_F(MapFiles, PngIsYUpGreyWhiteBlackAndScaled) {
   const OccupancyRaster raster = smallRaster();
   writePng(raster, path("floor.png"), 3);
