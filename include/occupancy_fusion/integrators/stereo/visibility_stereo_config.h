@@ -77,10 +77,12 @@ struct VisibilityStereoConfig {
   double measured_sigma_min_voxels = 1.0;
   double measured_sigma_max_voxels = 2.0;
   // Eq. 1 reads a known neighbour as the map's log-odds plus the measurement's free-space
-  // evidence (at most one clamped miss), not the map's alone: the frame's free space counts
-  // before visibility is decided, and a voxel the map holds near 0.5 does not block a ray that
-  // the frame shows passing.
-  bool measured_fuse_known = true;
+  // evidence (at most one clamped miss), not the map's alone, so that a voxel the map holds near
+  // 0.5 does not block a ray that the frame shows passing. Off by default: since voxels over
+  // invalid pixels read the surface next to them it no longer carries coverage, and with it a
+  // noisy frame's free space wore down walls the map knew (1 px of noise: false-occupied up to
+  // 0.249 of the OctoMap mode's, 0.179 without; docs/disparity_method.md).
+  bool measured_fuse_known = false;
   // The prior of Eq. 4-6 of a never-observed voxel is the measurement's P(O) where that is below
   // unknown_occupancy: a hit in space the frame's surface shows free (a phantom of a patch shifted
   // towards the camera, the noise in front of a surface) starts from free.
