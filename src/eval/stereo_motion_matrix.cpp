@@ -17,31 +17,38 @@ namespace occupancy_fusion {
 
 namespace {
 
-std::string motionName(const std::string& kind, double step) {
+// The motions whose speed is a parameter: the name's kind and the step's unit ("" for metres).
+struct MotionKind {
+  const char* kind;
+  StereoMotion motion;
+  const char* unit;
+};
+constexpr MotionKind kMotionKinds[] = {{"forward", StereoMotion::kForward, ""},
+                                       {"turn", StereoMotion::kTurn, "deg"},
+                                       {"sideways", StereoMotion::kSideways, ""},
+                                       {"aisle_curve", StereoMotion::kAisleCurve, ""},
+                                       {"aisle_diagonal", StereoMotion::kAisleDiagonal, ""},
+                                       {"aisle_fast", StereoMotion::kAisleFast, ""},
+                                       {"aisle_backward", StereoMotion::kAisleBackward, ""}};
+
+const MotionKind& kindOf(StereoMotion motion) {
+  for (const MotionKind& kind : kMotionKinds) {
+    if (kind.motion == motion) return kind;
+  }
+  throw std::invalid_argument("stereo motion without a step per frame");
+}
+
+// The motion at `step` per frame, named kind_step[unit]: forward_0.10, turn_5deg.
+StereoMotionCase motionAt(StereoMotion motion, double step) {
+  const MotionKind& kind = kindOf(motion);
   char text[64];
-  std::snprintf(text, sizeof(text), "%s_%.2f", kind.c_str(), step);
-  return text;
+  if (kind.unit[0] == '\0') {
+    std::snprintf(text, sizeof(text), "%s_%.2f", kind.kind, step);
+  } else {
+    std::snprintf(text, sizeof(text), "%s_%g%s", kind.kind, step, kind.unit);
+  }
+  return {text, motion, step};
 }
-
-}  // namespace
-
-std::vector<StereoMotionCase> stereoMatrixMotions() {
-  return {{motionName("forward", 0.03), StereoMotion::kForward, 0.03},
-          {motionName("forward", 0.10), StereoMotion::kForward, 0.10},
-          {motionName("forward", 0.20), StereoMotion::kForward, 0.20},
-          {"turn_5deg", StereoMotion::kTurn, 5.0},
-          {motionName("sideways", 0.10), StereoMotion::kSideways, 0.10},
-          {"standing", StereoMotion::kStanding, 0.0}};
-}
-
-std::vector<StereoMotionCase> stereoAisleMotions() {
-  return {{motionName("aisle_curve", 0.15), StereoMotion::kAisleCurve, 0.15},
-          {motionName("aisle_diagonal", 0.09), StereoMotion::kAisleDiagonal, 0.09},
-          {motionName("aisle_fast", 0.30), StereoMotion::kAisleFast, 0.30},
-          {motionName("aisle_backward", 0.10), StereoMotion::kAisleBackward, 0.10}};
-}
-
-namespace {
 
 // The step of `name` = kind + "_" + step + unit, where the step is a positive number; false where
 // the name is not of that form.
@@ -64,6 +71,17 @@ bool parseStep(const std::string& name, const std::string& kind, const std::stri
 
 }  // namespace
 
+std::vector<StereoMotionCase> stereoMatrixMotions() {
+  return {motionAt(StereoMotion::kForward, 0.03),  motionAt(StereoMotion::kForward, 0.10),
+          motionAt(StereoMotion::kForward, 0.20),  motionAt(StereoMotion::kTurn, 5.0),
+          motionAt(StereoMotion::kSideways, 0.10), {"standing", StereoMotion::kStanding, 0.0}};
+}
+
+std::vector<StereoMotionCase> stereoAisleMotions() {
+  return {motionAt(StereoMotion::kAisleCurve, 0.15), motionAt(StereoMotion::kAisleDiagonal, 0.09),
+          motionAt(StereoMotion::kAisleFast, 0.30), motionAt(StereoMotion::kAisleBackward, 0.10)};
+}
+
 StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
   std::string known;
   std::vector<StereoMotionCase> motions = stereoMatrixMotions();
@@ -73,19 +91,14 @@ StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
     known += (known.empty() ? "" : ", ") + motion.name;
   }
   // The same motions at other speeds: the kind's name and its step per frame.
-  const std::pair<const char*, StereoMotion> kinds[] = {
-      {"forward", StereoMotion::kForward},        {"sideways", StereoMotion::kSideways},
-      {"aisle_curve", StereoMotion::kAisleCurve}, {"aisle_diagonal", StereoMotion::kAisleDiagonal},
-      {"aisle_fast", StereoMotion::kAisleFast},   {"aisle_backward", StereoMotion::kAisleBackward}};
   double step = 0.0;
-  for (const auto& [kind, motion] : kinds) {
-    if (parseStep(name, kind, "", &step)) return {name, motion, step};
+  std::string forms;
+  for (const MotionKind& kind : kMotionKinds) {
+    if (parseStep(name, kind.kind, kind.unit, &step)) return {name, kind.motion, step};
+    forms += std::string(forms.empty() ? "" : ", ") + kind.kind + "_<step>" + kind.unit;
   }
-  if (parseStep(name, "turn", "deg", &step)) return {name, StereoMotion::kTurn, step};
   throw std::invalid_argument("unknown motion '" + name + "' (known: " + known +
-                              "; other steps: forward_<m>, sideways_<m>, turn_<deg>deg, "
-                              "aisle_curve_<m>, aisle_diagonal_<m>, aisle_fast_<m>, "
-                              "aisle_backward_<m>, per frame)");
+                              "; other steps per frame, metres or degrees: " + forms + ")");
 }
 
 bool StereoMotionSetup::isAisle() const {

@@ -495,6 +495,7 @@ double MeasuredSurface::nearestNodeWithin(double u, double v, double radius_px) 
   // Rings of nodes about the nearest node, outwards, until a ring lies farther than the best
   // node found or than radius_px: the node nearest to (u, v) in the image.
   constexpr int kMaxRings = 64;  // a footprint of 64 nodes' radius needs no finer answer
+  if (!(radius_px > 0)) return kNoSurface;
   const double gu = u / step_, gv = v / step_, radius = radius_px / step_;
   const int ci = static_cast<int>(std::lround(gu)), cj = static_cast<int>(std::lround(gv));
   double best_squared = radius * radius;
