@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "float_quads.h"
 #include "occupancy_fusion/integrators/stereo/median_network.h"
@@ -57,7 +59,7 @@ bool isValidDisparity(float d) { return std::isfinite(d) && d > 0; }
 
 namespace {
 
-// The point-symmetric pixel pairs about (u, v) within `reach` px whose pixels are both valid,
+// The point-symmetric pixel pairs about a node within `reach` px whose pixels are both valid,
 // and the centre pixel if it is: how many there are, how many of them lie within `limit` of
 // `reference` (both pixels), and the mean of those. On a plane, whose disparity is linear in u
 // and v, every pair mean is the centre's disparity, whatever the slope and also where invalid
@@ -67,95 +69,154 @@ struct LocalPairs {
   int inliers = 0;
   float mean = 0;
 };
-LocalPairs localPairs(const DisparityImageView& image, int u, int v, int reach, float reference,
-                      float limit) {
-  // Without a branch on the pixels' values (noise makes them unpredictable): NaN and +inf fail
-  // the comparisons.
-  auto valid = [](float d) { return (d > 0) & (d < std::numeric_limits<float>::infinity()); };
-  auto near = [&](float d) { return std::abs(d - reference) <= limit; };
-  // A pair needs both pixels in the image.
-  const int reach_u = std::min({reach, u, image.width - 1 - u});
-  const int reach_v = std::min({reach, v, image.height - 1 - v});
-  const std::size_t stride = image.row_stride > 0 ? image.row_stride : image.width;
-  const float* centre = image.disparity + static_cast<std::size_t>(v) * stride + u;
-  double sum = 0;
-  LocalPairs pairs;
-  for (int dv = -reach_v; dv <= 0; ++dv) {
-    const float* row = centre + dv * static_cast<std::ptrdiff_t>(stride);
-    const float* mirrored = centre - dv * static_cast<std::ptrdiff_t>(stride);
-    const int last = dv == 0 ? -1 : reach_u;
-    for (int du = -reach_u; du <= last; ++du) {
-      const float first = row[du], second = mirrored[-du];
-      const bool both = valid(first) & valid(second);
-      const bool inlier = both & near(first) & near(second);
-      sum += inlier ? 0.5 * (first + second) : 0.0;
-      pairs.valid += both;
-      pairs.inliers += inlier;
-    }
-  }
-  if (valid(*centre)) {
-    ++pairs.valid;
-    if (near(*centre)) {
-      sum += *centre;
-      ++pairs.inliers;
-    }
-  }
-  if (pairs.inliers > 0) pairs.mean = static_cast<float>(sum / pairs.inliers);
-  return pairs;
+
+// The vectors of Width lanes: floats, their comparisons' masks, and doubles for half of them.
+template <int Width>
+struct LaneVectors;
+template <>
+struct LaneVectors<4> {
+  using Float = FloatQuad;
+  using Int = int __attribute__((vector_size(4 * sizeof(int))));
+  using DoubleHalf = double __attribute__((vector_size(2 * sizeof(double))));  // two lanes
+};
+template <>
+struct LaneVectors<8> {
+  using Float = FloatOctet;
+  using Int = int __attribute__((vector_size(8 * sizeof(int))));
+  using DoubleHalf = double __attribute__((vector_size(4 * sizeof(double))));  // four lanes
+};
+
+// Adds the lanes of `term` in double, the first half of them to *low, the rest to *high (a
+// vector of Width doubles would live in memory).
+template <typename Vector, typename DoubleHalf, std::size_t... Lane>
+inline __attribute__((always_inline)) void addInDouble(const Vector& term, DoubleHalf* low,
+                                                       DoubleHalf* high,
+                                                       std::index_sequence<Lane...>) {
+  constexpr std::size_t kHalf = sizeof...(Lane);
+  *low += DoubleHalf{static_cast<double>(term[Lane])...};
+  *high += DoubleHalf{static_cast<double>(term[kHalf + Lane])...};
 }
 
-// localPairs of the nodes (u + l * step, v) of kLanes lanes at once, each against its own
-// reference, four lanes to a vector; every node's window must lie inside the image. Each lane adds
-// the same terms in the same order as localPairs, so the means are the same bits.
-void localPairsOfLanes(const DisparityImageView& image, int u, int step, int v, int reach,
-                       const float* references, float limit, LocalPairs* pairs) {
-  using IntQuad = int __attribute__((vector_size(4 * sizeof(int))));
+// The pixels `step` apart from p on, one a lane, written to `lanes` (returned through a
+// reference: a function built for the baseline must not return an AVX vector).
+template <typename Vector, std::size_t... Lane>
+inline __attribute__((always_inline)) void gatherLanes(const float* p, int step, Vector* lanes,
+                                                       std::index_sequence<Lane...>) {
+  *lanes = Vector{p[static_cast<std::ptrdiff_t>(Lane) * step]...};
+}
+
+// The LocalPairs of the nodes (u + l * step, v) of kLanes lanes at once, each against its own
+// reference, Width lanes to a Vector, without a branch on the pixels' values (noise makes them
+// unpredictable): NaN and +inf fail the comparisons. Every node's window must lie inside the
+// image (windowsOfLanes makes one that does). The mean is summed in double, pair by pair in
+// the window's row order, then the centre: the same operations on every lane whatever the
+// width, so both widths give the same bits. Inlined into each caller so that the vectors take
+// the caller's instruction set.
+template <int Width>
+inline __attribute__((always_inline)) void localPairsOfWidth(const DisparityImageView& image, int u,
+                                                             int step, int v, int reach,
+                                                             const float* references, float limit,
+                                                             LocalPairs* pairs) {
+  using Vector = typename LaneVectors<Width>::Float;
+  using IntVector = typename LaneVectors<Width>::Int;
+  using DoubleHalf = typename LaneVectors<Width>::DoubleHalf;
   constexpr float kInf = std::numeric_limits<float>::infinity();
   const std::ptrdiff_t stride = image.row_stride > 0 ? image.row_stride : image.width;
-  const FloatQuad no_term = {};
-  for (int q = 0; q < MedianNetwork::kLanes / 4; ++q) {
-    const float* centre = image.disparity + v * stride + u + 4 * q * step;
-    const FloatQuad reference = loadQuad(references + 4 * q);
-    auto gather = [&](std::ptrdiff_t offset) {
-      const float* p = centre + offset;
-      return FloatQuad{p[0], p[step], p[2 * step], p[3 * step]};
-    };
-    auto valid = [](const FloatQuad& d) { return (d > 0) & (d < kInf); };  // NaN, inf fail
-    // |d - reference| <= limit, as the difference and its negation (the same bits negated).
-    auto near = [&](const FloatQuad& d) {
-      return (d - reference <= limit) & (reference - d <= limit);
-    };
-    IntQuad valid_count = {}, inlier_count = {};
-    DoublePair low_sum = {}, high_sum = {};  // lanes 0-1 and 2-3
-    // A term left out adds 0.0 (as in localPairs; the sums start at +0).
-    auto add = [&](const FloatQuad& term, double factor) {
-      low_sum += factor * DoublePair{term[0], term[1]};
-      high_sum += factor * DoublePair{term[2], term[3]};
-    };
+  const Vector no_term = {};
+  const IntVector magnitude = IntVector{} + 0x7fffffff;  // all bits but the sign
+  for (int part = 0; part < MedianNetwork::kLanes / Width; ++part) {
+    const float* centre = image.disparity + v * stride + u + Width * part * step;
+    Vector reference;
+    std::memcpy(&reference, references + Width * part, sizeof(reference));
+    IntVector valid_count = {}, inlier_count = {};
+    // The pairs' float sums added in double and halved once before the centre: halving is exact,
+    // so this is the sum of the pair means, bit for bit. A term left out adds 0.0 (the sums
+    // start at +0). valid: NaN and +inf fail; inlier: |d - reference| <= limit (NaN fails).
+    DoubleHalf low = {}, high = {};  // lanes [0, Width / 2) and [Width / 2, Width)
     for (int dv = -reach; dv <= 0; ++dv) {
       const int last = dv == 0 ? -1 : reach;
       for (int du = -reach; du <= last; ++du) {
-        const FloatQuad first = gather(dv * stride + du), second = gather(-dv * stride - du);
-        const IntQuad both = valid(first) & valid(second);
-        const IntQuad inlier = both & near(first) & near(second);
-        add(inlier ? first + second : no_term, 0.5);  // the float sum halved in double
-        valid_count -= both;                          // masks are -1
+        Vector first, second;
+        gatherLanes(centre + dv * stride + du, step, &first, std::make_index_sequence<Width>());
+        gatherLanes(centre - dv * stride - du, step, &second, std::make_index_sequence<Width>());
+        const IntVector both = (first > 0) & (first < kInf) & (second > 0) & (second < kInf);
+        const IntVector inlier = both &
+                                 ((Vector)((IntVector)(first - reference) & magnitude) <= limit) &
+                                 ((Vector)((IntVector)(second - reference) & magnitude) <= limit);
+        addInDouble(inlier ? first + second : no_term, &low, &high,
+                    std::make_index_sequence<Width / 2>());
+        valid_count -= both;  // masks are -1
         inlier_count -= inlier;
       }
     }
-    const FloatQuad middle = gather(0);
-    const IntQuad middle_valid = valid(middle), middle_inlier = middle_valid & near(middle);
-    add(middle_inlier ? middle : no_term, 1.0);
+    low *= 0.5;
+    high *= 0.5;
+    Vector middle;
+    gatherLanes(centre, step, &middle, std::make_index_sequence<Width>());
+    const IntVector middle_valid = (middle > 0) & (middle < kInf);
+    const IntVector middle_inlier =
+        middle_valid & ((Vector)((IntVector)(middle - reference) & magnitude) <= limit);
+    addInDouble(middle_inlier ? middle : no_term, &low, &high,
+                std::make_index_sequence<Width / 2>());
     valid_count -= middle_valid;
     inlier_count -= middle_inlier;
-    const double sums[4] = {low_sum[0], low_sum[1], high_sum[0], high_sum[1]};
-    for (int l = 0; l < 4; ++l) {
-      LocalPairs& lane = pairs[4 * q + l];
+    for (int l = 0; l < Width; ++l) {
+      LocalPairs& lane = pairs[Width * part + l];
       lane.valid = valid_count[l];
       lane.inliers = inlier_count[l];
-      lane.mean = lane.inliers > 0 ? static_cast<float>(sums[l] / lane.inliers) : 0.0f;
+      const double sum = l < Width / 2 ? low[l] : high[l - Width / 2];
+      lane.mean = lane.inliers > 0 ? static_cast<float>(sum / lane.inliers) : 0.0f;
     }
   }
+}
+
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
+// With AVX2 (chosen at run time): one octet, half the instructions.
+__attribute__((target("avx2"))) void localPairsOnOctets(const DisparityImageView& image, int u,
+                                                        int step, int v, int reach,
+                                                        const float* references, float limit,
+                                                        LocalPairs* pairs) {
+  localPairsOfWidth<8>(image, u, step, v, reach, references, limit, pairs);
+}
+bool hasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+void localPairsOfLanes(const DisparityImageView& image, int u, int step, int v, int reach,
+                       const float* references, float limit,
+                       MedianNetwork::Instructions instructions, LocalPairs* pairs) {
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
+  if (instructions == MedianNetwork::Instructions::kWidest && hasAvx2()) {
+    localPairsOnOctets(image, u, step, v, reach, references, limit, pairs);
+    return;
+  }
+#endif
+  localPairsOfWidth<4>(image, u, step, v, reach, references, limit, pairs);
+}
+
+// The pixels that the small windows of a row's kLanes nodes from (u, v) on (`step` px apart)
+// read, NaN outside the image, as an image of its own in which those nodes lie at (reach, reach)
+// on: for localPairsOfLanes where a window is cut by the image's border (a pair with a pixel
+// outside is invalid, as a pair with a hole) or a lane lies past the row's last node.
+DisparityImageView windowsOfLanes(const DisparityImageView& image, int u, int step, int v,
+                                  int reach, std::vector<float>* patch) {
+  DisparityImageView windows;
+  windows.width = (MedianNetwork::kLanes - 1) * step + 2 * reach + 1;
+  windows.height = 2 * reach + 1;
+  patch->assign(static_cast<std::size_t>(windows.width) * windows.height, kNoSurface);
+  for (int y = 0; y < windows.height; ++y) {
+    const int image_v = v - reach + y;
+    if (image_v < 0 || image_v >= image.height) continue;
+    const int first = std::max(0, reach - u),
+              last = std::min(windows.width, image.width - u + reach);
+    if (first >= last) continue;
+    std::copy(image.row(image_v) + (u - reach + first), image.row(image_v) + (u - reach + last),
+              patch->data() + static_cast<std::size_t>(y) * windows.width + first);
+  }
+  windows.disparity = patch->data();
+  return windows;
 }
 
 }  // namespace
@@ -315,11 +376,13 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
   const int per_side = 2 * reach + 1;
   const int pairs = 2 * reach * (reach + 1) + 1;  // pair means and the centre
   const int needed = static_cast<int>(std::ceil(config.min_valid * (per_side * per_side + 1) / 2));
-  const MedianNetwork pair_network(pairs), sample_network((per_side * per_side + 1) / 2);
+  const MedianNetwork pair_network(pairs, config.instructions),
+      sample_network((per_side * per_side + 1) / 2, config.instructions);
   const int local_reach = config.local_window_px / 2;
   const float limit = static_cast<float>(config.inlier_px);
   forEachRow(rows_, [&](int j) {
     std::vector<MedianNetwork::Lanes> rows(per_side * per_side);
+    std::vector<float> patch;  // a border group's windows (windowsOfLanes)
     int counts[kLanes], sample_counts[kLanes];
     float robust[kLanes], one_side[kLanes];
     LocalPairs local[kLanes], side[kLanes];
@@ -345,17 +408,17 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
       //    window's samples themselves (every other one), which lies on one side, takes its
       //    place.
       const int u = first * step_;
-      const bool inside = lanes_used == kLanes && u >= local_reach &&
-                          u + (kLanes - 1) * step_ + local_reach < width_ && v >= local_reach &&
-                          v + local_reach < height_;
+      const bool inside = u >= local_reach && u + (kLanes - 1) * step_ + local_reach < width_ &&
+                          v >= local_reach && v + local_reach < height_;
+      DisparityImageView windows = disparity;
+      int window_u = u, window_v = v;
+      if (!inside) {
+        windows = windowsOfLanes(disparity, u, step_, v, local_reach, &patch);
+        window_u = window_v = local_reach;
+      }
       auto localPairsOfRow = [&](const float* references, LocalPairs* pairs) {
-        if (inside) {
-          localPairsOfLanes(disparity, u, step_, v, local_reach, references, limit, pairs);
-          return;
-        }
-        for (int l = 0; l < lanes_used; ++l) {
-          pairs[l] = localPairs(disparity, u + l * step_, v, local_reach, references[l], limit);
-        }
+        localPairsOfLanes(windows, window_u, step_, window_v, local_reach, references, limit,
+                          config.instructions, pairs);
       };
       localPairsOfRow(robust, local);
       bool straddles = false;

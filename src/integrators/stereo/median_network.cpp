@@ -15,12 +15,6 @@
 #include <immintrin.h>
 #endif
 
-// The AVX2 path (target attribute, run-time check) where the compiler can build it beside the
-// baseline one.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define OCCUPANCY_FUSION_HAS_AVX2_PATH 1
-#endif
-
 namespace occupancy_fusion {
 
 namespace {
@@ -86,7 +80,6 @@ MedianNetwork::MedianNetwork(int slots, Instructions instructions)
 
 namespace {
 
-using FloatOctet = float __attribute__((vector_size(8 * sizeof(float))));
 static_assert(MedianNetwork::kLanes == 8, "one octet or two quads hold the lanes");
 
 // The network on the lanes as kLanes / Width vectors of Width floats (Vector), the same

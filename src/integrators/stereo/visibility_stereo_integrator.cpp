@@ -546,11 +546,16 @@ class RayCaster {
       const Eigen::Vector3d offset = point - frame.origin;
       range_ = offset.norm();
       direction_ = offset / range_;
+      // phi's argument (s - range) / sigma lies below -kRange, where phi is 0, for s below this
+      // (the margins outweigh the rounding of the subtraction and the division).
+      zero_before_ = range_ - (NormalCdfTable::kRange + 1e-3) * range_sigma_ - 1e-9 * range_;
     }
     bool open() const { return open_; }
     double farthestReach() const { return open_ ? range_ + 6.0 * range_sigma_ : 0.0; }  // m
     double next(const Eigen::Vector3d& centre_from_origin, const NormalCdfTable& phi) {
       if (!open_) return 0.0;
+      // Most of a walk lies far in front of its point: P(I_v) = 0 there without the division.
+      if (centre_from_origin.dot(direction_) < zero_before_) return 0.0;
       const double p_inside =
           insideProbability(centre_from_origin, direction_, range_, range_sigma_, phi);
       if (p_inside < stop_) return p_inside;
@@ -560,7 +565,7 @@ class RayCaster {
 
    private:
     Eigen::Vector3d direction_ = Eigen::Vector3d::Zero();
-    double range_ = 0, range_sigma_ = 0, stop_ = 1;
+    double range_ = 0, range_sigma_ = 0, stop_ = 1, zero_before_ = 0;
     bool open_ = false;
   };
 

@@ -373,11 +373,11 @@ float nodeByDefinition(const std::vector<float>& image, int width, int height, i
   return inliers >= 4 ? side_mean : one_side;
 }
 
-TEST(MeasuredSurface, NodesOfANoisyImageWithHolesAndPatchesFollowTheDefinition) {
-  // A slanted plane with a nearer box on it (steps), pixel noise, holes and patches of wrong
-  // disparity; an odd size, so that rows of nodes end in part groups and next to the borders.
-  constexpr int kOddWidth = 203, kOddHeight = 77;
-  const StereoCamera camera{125.0, 125.0, 101.0, 38.0, 0.12};
+// A slanted plane with a nearer box on it (steps), pixel noise, holes and patches of wrong
+// disparity; an odd size, so that rows of nodes end in part groups and next to the borders.
+constexpr int kOddWidth = 203, kOddHeight = 77;
+const StereoCamera kOddCamera{125.0, 125.0, 101.0, 38.0, 0.12};
+std::vector<float> noisyImageWithHolesAndPatches() {
   std::mt19937 random(11);
   std::normal_distribution<float> noise(0.0f, 0.3f);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -393,32 +393,68 @@ TEST(MeasuredSurface, NodesOfANoisyImageWithHolesAndPatchesFollowTheDefinition) 
       image[static_cast<std::size_t>(v) * kOddWidth + u] = d;
     }
   }
+  return image;
+}
+
+TEST(MeasuredSurface, NodesOfANoisyImageWithHolesAndPatchesFollowTheDefinition) {
+  const std::vector<float> image = noisyImageWithHolesAndPatches();
+  const StereoCamera& camera = kOddCamera;
   const DisparityImageView view{kOddWidth, kOddHeight, image.data(), 0};
-  for (int grid : {4, 8}) {
-    MeasuredSurfaceConfig config;
-    config.grid_step_px = grid;
-    const MeasuredSurface surface(view, camera, Eigen::Isometry3d::Identity(), config);
-    ASSERT_EQ(surface.gridStep(), grid);
-    int nodes = 0, compared = 0;
-    for (int v = 0; v < kOddHeight; v += grid) {
-      for (int u = 0; u < kOddWidth; u += grid) {
-        const float expected = nodeByDefinition(image, kOddWidth, kOddHeight, u, v, config);
-        if (!std::isfinite(expected)) continue;
-        ++nodes;
-        // At a node's own pixel the grid reads the node (where at most one corner of its cell
-        // lacks a surface).
-        const Eigen::Vector3d point((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
-        double z = 0, z_surface = 0;
-        if (!surface.depthAt(point, &z, &z_surface)) continue;
-        ++compared;
-        const double read = camera.fx * camera.baseline / z_surface;
-        EXPECT_NEAR(read, expected, 1e-4 * expected)
-            << "node at " << u << ", " << v << ", grid " << grid;
+  for (const auto instructions :
+       {MedianNetwork::Instructions::kWidest, MedianNetwork::Instructions::kBaseline}) {
+    for (int grid : {4, 8}) {
+      MeasuredSurfaceConfig config;
+      config.grid_step_px = grid;
+      config.instructions = instructions;
+      const MeasuredSurface surface(view, camera, Eigen::Isometry3d::Identity(), config);
+      ASSERT_EQ(surface.gridStep(), grid);
+      int nodes = 0, compared = 0;
+      for (int v = 0; v < kOddHeight; v += grid) {
+        for (int u = 0; u < kOddWidth; u += grid) {
+          const float expected = nodeByDefinition(image, kOddWidth, kOddHeight, u, v, config);
+          if (!std::isfinite(expected)) continue;
+          ++nodes;
+          // At a node's own pixel the grid reads the node (where at most one corner of its cell
+          // lacks a surface).
+          const Eigen::Vector3d point((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy,
+                                      1.0);
+          double z = 0, z_surface = 0;
+          if (!surface.depthAt(point, &z, &z_surface)) continue;
+          ++compared;
+          const double read = camera.fx * camera.baseline / z_surface;
+          EXPECT_NEAR(read, expected, 1e-4 * expected)
+              << "node at " << u << ", " << v << ", grid " << grid;
+        }
       }
+      EXPECT_GT(nodes, kOddWidth * kOddHeight / (grid * grid) / 2);
+      EXPECT_GT(compared, 0.9 * nodes) << "grid " << grid;
     }
-    EXPECT_GT(nodes, kOddWidth * kOddHeight / (grid * grid) / 2);
-    EXPECT_GT(compared, 0.9 * nodes) << "grid " << grid;
   }
+}
+
+TEST(MeasuredSurface, WidestAndBaselineInstructionsGiveTheSameSurfaceBitForBit) {
+  // The AVX2 path (where the processor has it) and plain x86-64's add the same terms in the same
+  // order: every pixel's surface depth is the same double.
+  const std::vector<float> image = noisyImageWithHolesAndPatches();
+  const DisparityImageView view{kOddWidth, kOddHeight, image.data(), 0};
+  MeasuredSurfaceConfig widest, baseline;
+  baseline.instructions = MedianNetwork::Instructions::kBaseline;
+  const MeasuredSurface a(view, kOddCamera, Eigen::Isometry3d::Identity(), widest);
+  const MeasuredSurface b(view, kOddCamera, Eigen::Isometry3d::Identity(), baseline);
+  int read = 0;
+  for (int v = 0; v < kOddHeight; ++v) {
+    for (int u = 0; u < kOddWidth; ++u) {
+      const Eigen::Vector3d point((u + 0.3 - kOddCamera.cx) / kOddCamera.fx,
+                                  (v + 0.6 - kOddCamera.cy) / kOddCamera.fy, 1.0);
+      double za = 0, zb = 0, surface_a = 0, surface_b = 0;
+      const bool says_a = a.depthAt(point, &za, &surface_a);
+      ASSERT_EQ(says_a, b.depthAt(point, &zb, &surface_b)) << "pixel " << u << ", " << v;
+      if (!says_a) continue;
+      ++read;
+      ASSERT_EQ(surface_a, surface_b) << "pixel " << u << ", " << v;
+    }
+  }
+  EXPECT_GT(read, kOddWidth * kOddHeight / 2);
 }
 
 TEST(MeasuredSurface, RejectsBadConfigurations) {

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "occupancy_fusion/integrators/stereo/median_network.h"
 #include "occupancy_fusion/sensors/disparity_image.h"
 
 namespace occupancy_fusion {
@@ -59,6 +60,9 @@ struct MeasuredSurfaceConfig {
   // changes alike; 0.25 px is about four times the noise of one grid surface at 0.3 px of pixel
   // noise. 0: never.
   double step_px = 0.25;
+  // The vector instructions of the medians and the small windows' means: the same surface either
+  // way; kBaseline runs plain x86-64's on any processor (for tests).
+  MedianNetwork::Instructions instructions = MedianNetwork::Instructions::kWidest;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
