@@ -299,7 +299,7 @@ const std::vector<Workload>& workloads() {
        "      [--threads T] [--clock cpu|wall] [--unknown_neighbour_occupancy P] [--rtabmap DIR]\n"
        "      [--parameter_set measured|table_i|fast_expansion] [--bundle_rays true|false]\n"
        "      [--method visibility|octomap] [--measured_grid_fraction F]\n"
-       "      [--measured_fuse_known 0|1]\n"
+       "      [--measured_grid_max_px P] [--measured_fuse_known 0|1]\n"
        "      [--picture PREFIX [--picture_scene S] [--picture_resolution R]]\n"
        "      Schauwecker & Zell's visibility-aware stereo integrator on ground-truth and\n"
        "      StereoSGBM disparity vs octomap::OcTree::insertPointCloud (plain, discretized) on\n"
@@ -326,6 +326,7 @@ const std::vector<Workload>& workloads() {
         "bundle_rays",
         "method",
         "measured_grid_fraction",
+        "measured_grid_max_px",
         "measured_fuse_known"},
        runDisparity},
       {"disparity-artifacts",
@@ -366,6 +367,7 @@ const std::vector<Workload>& workloads() {
         "measured_step_px",
         "measured_grid_px",
         "measured_grid_fraction",
+        "measured_grid_max_px",
         "measured_sigma_max_voxels",
         "measured_fuse_known",
         "measured_prior",

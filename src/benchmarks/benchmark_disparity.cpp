@@ -131,6 +131,8 @@ bool g_bundle_rays = VisibilityStereoConfig().bundle_rays;
 StereoIntegrationMethod g_method = VisibilityStereoConfig().method;
 // --measured_grid_fraction (MeasuredSurfaceConfig::grid_footprint_fraction).
 double g_grid_fraction = MeasuredSurfaceConfig().grid_footprint_fraction;
+// --measured_grid_max_px (MeasuredSurfaceConfig::grid_max_step_px).
+int g_grid_max_px = MeasuredSurfaceConfig().grid_max_step_px;
 // --measured_fuse_known (VisibilityStereoConfig::measured_fuse_known).
 bool g_fuse_known = VisibilityStereoConfig().measured_fuse_known;
 
@@ -140,6 +142,7 @@ VisibilityStereoConfig stereoConfig(double sigma_px, InputResolution input) {
   config.bundle_rays = g_bundle_rays;
   config.method = g_method;
   config.measured_surface.grid_footprint_fraction = g_grid_fraction;
+  config.measured_surface.grid_max_step_px = g_grid_max_px;
   config.measured_fuse_known = g_fuse_known;
   config.disparity.disparity_sigma_px = sigma_px;
   config.disparity.input_resolution = input;
@@ -741,6 +744,7 @@ int runDisparity(const CommandLine& args) {
   options.sigma_px = args.doubleValue("sigma", 0.5);
   g_parameter_set = stereoParameterSetFromString(args.value("parameter_set", "measured"));
   g_grid_fraction = args.doubleValue("measured_grid_fraction", g_grid_fraction);
+  g_grid_max_px = args.intValue("measured_grid_max_px", g_grid_max_px);
   g_fuse_known = args.intValue("measured_fuse_known", g_fuse_known) != 0;
   g_unknown_neighbour_occupancy =
       args.doubleValue("unknown_neighbour_occupancy", g_unknown_neighbour_occupancy);

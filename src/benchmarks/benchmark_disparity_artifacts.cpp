@@ -277,6 +277,8 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
       args.intValue("measured_grid_px", config.measured_surface.grid_step_px);
   config.measured_surface.grid_footprint_fraction =
       args.doubleValue("measured_grid_fraction", config.measured_surface.grid_footprint_fraction);
+  config.measured_surface.grid_max_step_px =
+      args.intValue("measured_grid_max_px", config.measured_surface.grid_max_step_px);
   config.measured_sigma_max_voxels =
       args.doubleValue("measured_sigma_max_voxels", config.measured_sigma_max_voxels);
   for (const auto& [option, field] :

@@ -58,6 +58,7 @@ VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source)
   read(source, "measured_window_px", &config.measured_surface.window_px);
   read(source, "measured_step_px", &config.measured_surface.step_px);
   read(source, "measured_grid_fraction", &config.measured_surface.grid_footprint_fraction);
+  read(source, "measured_grid_max_px", &config.measured_surface.grid_max_step_px);
   read(source, "inside_stop_probability", &config.inside_stop_probability);
   read(source, "max_range", &config.max_range);
   read(source, "bundle_rays", &config.bundle_rays);

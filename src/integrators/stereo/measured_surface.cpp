@@ -39,6 +39,12 @@ void MeasuredSurfaceConfig::validate() const {
     throw std::invalid_argument(
         "MeasuredSurfaceConfig.grid_step_px must be a multiple of sample_step_px");
   }
+  if (grid_max_step_px != 0 && (grid_max_step_px < grid_step_px || grid_max_step_px > window_px ||
+                                grid_max_step_px % sample_step_px != 0)) {
+    throw std::invalid_argument(
+        "MeasuredSurfaceConfig.grid_max_step_px must be 0 or a multiple of sample_step_px in "
+        "[grid_step_px, window_px]");
+  }
   if (!(step_px >= 0)) throw std::invalid_argument("MeasuredSurfaceConfig.step_px must be >= 0");
   if (!(min_valid > 0 && min_valid <= 1)) {
     throw std::invalid_argument("MeasuredSurfaceConfig.min_valid must be in (0, 1]");
@@ -233,7 +239,8 @@ int MeasuredSurface::gridStepForSmallest(float smallest, const StereoCamera& cam
   if (scale.max_range_m > 0)
     smallest = std::max<float>(smallest, focal_baseline / scale.max_range_m);
   const double footprint_px = scale.voxel_size_m * smallest / camera.baseline;
-  const int widest = config.window_px / sample * sample;
+  int widest = config.window_px / sample * sample;
+  if (config.grid_max_step_px > 0) widest = std::min(widest, config.grid_max_step_px);
   const int step =
       static_cast<int>(config.grid_footprint_fraction * footprint_px / sample) * sample;
   return std::max(config.grid_step_px, std::min(widest, step));

@@ -258,6 +258,7 @@ TEST(MeasuredSurface, GridFollowsTheSmallestVoxelImage) {
   image[5 * kWidth + 7] = 3.0f;
   const DisparityImageView view{kWidth, kHeight, image.data(), 0};
   MeasuredSurfaceConfig config;
+  config.grid_max_step_px = 0;  // the window's width
   auto step = [&](double fraction, double voxel, double min_disparity, double max_range) {
     config.grid_footprint_fraction = fraction;
     SurfaceGridScale scale;
@@ -275,6 +276,10 @@ TEST(MeasuredSurface, GridFollowsTheSmallestVoxelImage) {
   EXPECT_EQ(step(1.0, 0.02, 0.0, -1.0), 4);  // 2 px: never finer than grid_step_px
   EXPECT_EQ(step(0.0, 0.2, 0.0, -1.0), 4);   // fraction 0: the fixed grid
   EXPECT_EQ(step(1.0, 0.0, 0.0, -1.0), 4);   // no voxel size: the fixed grid
+  config.grid_max_step_px = 12;
+  EXPECT_EQ(step(1.0, 0.2, 0.0, -1.0), 12);  // 20 px, at most grid_max_step_px
+  EXPECT_EQ(step(0.5, 0.2, 0.0, -1.0), 8);
+  config.grid_max_step_px = 0;
   // A farther pixel on the lattice: 0.2 m at d = 3 px is 5 px.
   image[8 * kWidth + 12] = 3.0f;
   EXPECT_EQ(step(1.0, 0.2, 0.0, -1.0), 4);
@@ -296,6 +301,7 @@ TEST(MeasuredSurface, ReadsAPlaneAlikeOnACoarseGrid) {
   const DisparityImageView view{kWidth, kHeight, image.data(), 0};
   MeasuredSurfaceConfig config;
   config.grid_footprint_fraction = 1.0;
+  config.grid_max_step_px = 0;
   SurfaceGridScale scale;
   scale.voxel_size_m = 2.0;  // over 30 px at the plane's far side: the widest grid
   const MeasuredSurface coarse(view, kCamera, Eigen::Isometry3d::Identity(), config, scale);
@@ -475,6 +481,9 @@ TEST(MeasuredSurface, RejectsBadConfigurations) {
   rejects([](MeasuredSurfaceConfig& c) { c.step_px = -0.1; });
   rejects([](MeasuredSurfaceConfig& c) { c.window_px = 128; });  // 33^2 samples
   rejects([](MeasuredSurfaceConfig& c) { c.grid_footprint_fraction = -0.1; });
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_max_step_px = 6; });   // not a multiple of 4
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_max_step_px = 28; });  // wider than the window
+  rejects([](MeasuredSurfaceConfig& c) { c.grid_max_step_px = -4; });
   rejects([](MeasuredSurfaceConfig& c) { c.grid_footprint_fraction = std::nan(""); });
   MeasuredSurfaceConfig widest;
   widest.window_px = 127;  // 31^2 samples: the widest median

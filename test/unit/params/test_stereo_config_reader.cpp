@@ -193,6 +193,7 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
                                           "measured_window_px",
                                           "measured_step_px",
                                           "measured_grid_fraction",
+                                          "measured_grid_max_px",
                                           "inside_stop_probability",
                                           "max_range",
                                           "bundle_rays",
@@ -219,6 +220,8 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
   EXPECT_EQ(from_file.measured_surface.window_px, MeasuredSurfaceConfig().window_px);
   EXPECT_DOUBLE_EQ(from_file.measured_surface.grid_footprint_fraction,
                    MeasuredSurfaceConfig().grid_footprint_fraction);
+  EXPECT_EQ(from_file.measured_surface.grid_max_step_px,
+            MeasuredSurfaceConfig().grid_max_step_px);
   EXPECT_EQ(from_file.method, defaults.method);
   EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_occupied, defaults.prob_hit_visible_occupied);
   EXPECT_DOUBLE_EQ(from_file.prob_hit_visible_free, defaults.prob_hit_visible_free);

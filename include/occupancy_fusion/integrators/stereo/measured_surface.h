@@ -35,12 +35,15 @@ struct MeasuredSurfaceConfig {
   int grid_step_px = 4;
   // With a voxel size given: the grid may be coarser, up to this fraction of the image size of a
   // voxel at the frame's farthest measured depth (the smallest any voxel a ray reaches appears),
-  // rounded down to a multiple of sample_step_px and at most window_px. A voxel reads the surface
-  // at its centre's projection, so a grid much finer than a voxel's image adds work and no
-  // detail: a close-range camera with coarse voxels (Middlebury's 2-5 m at 0.2 m: 41 px a voxel,
-  // an 8 px grid) needs a quarter of the grid points. At 0.5, grids of 20 px lost up to 0.03 of
-  // the surface there (docs/disparity_method.md). 0: always grid_step_px.
-  double grid_footprint_fraction = 0.25;
+  // rounded down to a multiple of sample_step_px and at most grid_max_step_px. A voxel reads the
+  // surface at its centre's projection, so a grid much finer than a voxel's image adds work and
+  // no detail: Middlebury's 2-5 m at 0.1 m (17-20 px a voxel) takes an 8 px grid, a quarter of
+  // the 4 px grid's points (docs/disparity_method.md). 0: always grid_step_px.
+  double grid_footprint_fraction = 0.5;
+  // px, the coarsest grid grid_footprint_fraction may choose (a multiple of sample_step_px, at
+  // most window_px; 0: window_px). Coarser grids interpolate across more of an object's outline:
+  // 12-24 px grids lost up to 0.03 of the surface on Middlebury.
+  int grid_max_step_px = 8;
   // px between the wide window's samples (7 x 7 of a 25 px window); grid_step_px must be a
   // multiple of it, so that every grid surface samples one lattice of pixels, read once per frame.
   int sample_step_px = 4;
