@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -85,6 +86,17 @@ class FrameBlockTable {
   Value& at(const VoxelIndex& voxel, const BlockIndex& origin_block) {
     return values(VoxelMap::blockOf(voxel), origin_block)[VoxelMap::linearIndexInBlock(voxel)];
   }
+  // The blocks in the order they were first written, and by that number their 512 values (by
+  // VoxelMap::linearIndexInBlock); numberOf: kNone where the block has none.
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const std::vector<BlockIndex>& blocks() const { return block_indices_; }
+  const Value* valuesOf(std::uint32_t number) const { return blocks_[number].data(); }
+  std::uint32_t numberOf(const BlockIndex& block, const BlockIndex& origin_block) const {
+    const BlockIndex offset = block - origin_block;
+    if ((offset.array().abs() < kNearReach).all()) return near_numbers_[nearSlot(offset)];
+    const auto it = block_numbers_.find(packKey(offset));
+    return it == block_numbers_.end() ? kNone : it->second;
+  }
 
  private:
   Value* values(const BlockIndex& block, const BlockIndex& origin_block) {
@@ -93,24 +105,24 @@ class FrameBlockTable {
     std::uint32_t* number = nullptr;
     if ((offset.array().abs() < kNearReach).all()) {
       number = &near_numbers_[nearSlot(offset)];
-      if (*number == kNone) *number = newBlock();
+      if (*number == kNone) *number = newBlock(block);
     } else {
       const auto [it, inserted] = block_numbers_.try_emplace(packKey(offset), 0u);
-      if (inserted) it.value() = newBlock();
+      if (inserted) it.value() = newBlock(block);
       number = &it.value();
     }
     last_block_ = block;
     last_ = blocks_[*number].data();
     return last_;
   }
-  std::uint32_t newBlock() {
+  std::uint32_t newBlock(const BlockIndex& block) {
     blocks_.emplace_back().fill(initial_);
+    block_indices_.push_back(block);
     return static_cast<std::uint32_t>(blocks_.size() - 1);
   }
   // Blocks within kNearReach - 1 of the origin's block, along every axis, are numbered in a dense
   // cube: most of a frame's block look-ups without a hash.
   static constexpr int kNearReach = 8, kNearEdge = 2 * kNearReach - 1;
-  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   static std::size_t nearSlot(const BlockIndex& offset) {
     return (static_cast<std::size_t>(offset.z() + kNearReach - 1) * kNearEdge +
             (offset.y() + kNearReach - 1)) *
@@ -123,6 +135,7 @@ class FrameBlockTable {
       std::vector<std::uint32_t>(kNearEdge * kNearEdge * kNearEdge, kNone);
   SpatialKeyMap<std::uint32_t> block_numbers_;                 // block key -> position in blocks_
   std::deque<std::array<Value, VoxelBlock::kVolume>> blocks_;  // growing it moves no array
+  std::vector<BlockIndex> block_indices_;                      // per position in blocks_
   BlockIndex last_block_ = BlockIndex::Zero();
   Value* last_ = nullptr;
 };
@@ -192,9 +205,29 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   }
   std::vector<StereoVoxelUpdate>& entries() { return entries_; }
 
+  // By block, for writing the map straight from the threads' tables (writeThreadUpdates).
+  static constexpr std::uint32_t kNoEntry = std::numeric_limits<std::uint32_t>::max();
+  using Slots = FrameBlockTable<std::uint32_t>;
+  const Slots& slots() const { return slots_; }
+  // The entry's update with the bound on its P(I_v) applied (as capInside()).
+  StereoVoxelUpdate cappedEntry(std::uint32_t entry) const {
+    StereoVoxelUpdate update = entries_[entry];
+    const float cap = readings_[entry].inside_cap;
+    if (cap < update.p_inside) update.p_inside = cap;
+    return update;
+  }
+  // Per block number of slots(): whether an entry there was updated (visibility > 0).
+  std::vector<char> updatedBlocks(const BlockIndex& origin_block) const {
+    std::vector<char> updated(slots_.blocks().size(), 0);
+    for (const StereoVoxelUpdate& update : entries_) {
+      if (update.visibility > 0)
+        updated[slots_.numberOf(VoxelMap::blockOf(update.index), origin_block)] = 1;
+    }
+    return updated;
+  }
+
  private:
   static constexpr float kNotComputed = std::numeric_limits<float>::quiet_NaN();
-  static constexpr std::uint32_t kNoEntry = std::numeric_limits<std::uint32_t>::max();
 
   FrameBlockTable<std::uint32_t> slots_{kNoEntry};  // voxel -> its entry
   std::vector<StereoVoxelUpdate> entries_;
@@ -605,6 +638,101 @@ class RayCaster {
   RayCounters counters_;
 };
 
+// One voxel's reduced update written to its block: Eq. 4-8 from the block's value (or the
+// update's prior where the voxel is unknown), or OctoMap's hit or miss.
+class UpdateWriter {
+ public:
+  UpdateWriter(const VisibilityStereoConfig& config, const VoxelMap& map)
+      : config_(config),
+        octomap_(config.method == StereoIntegrationMethod::kOctomap),
+        min_log_odds_(map.minLogOdds()),
+        max_log_odds_(map.maxLogOdds()),
+        hit_(map.model().hitLogOdds()),
+        miss_(map.model().missLogOdds()) {}
+
+  void write(const StereoVoxelUpdate& update, int linear, VoxelBlock* block) const {
+    if (octomap_) {
+      block->update(linear, update.p_inside >= 1.0f ? hit_ : miss_, min_log_odds_, max_log_odds_);
+      return;
+    }
+    const float old_value = block->log_odds[linear];
+    const double p_unknown = update.prior >= 0 ? update.prior : config_.unknown_occupancy;
+    const double p_old =
+        VoxelBlock::isKnown(old_value) ? probabilityFromLogOdds(old_value) : p_unknown;
+    const double p_new =
+        occupancyAfterInterpolatedMeasurement(p_old, update.p_inside, update.visibility, config_);
+    // Clamped like OctoMap, to the map's [clamp_min, clamp_max].
+    block->set(linear, std::clamp(logit(p_new), min_log_odds_, max_log_odds_));
+  }
+
+ private:
+  const VisibilityStereoConfig& config_;
+  bool octomap_;
+  float min_log_odds_, max_log_odds_, hit_, miss_;
+};
+
+// The threads' updates written to the map block by block, each block on one thread, without
+// merging the threads' tables first (a serial pass over every entry) or grouping the merged
+// updates by block (a hash per update): a voxel's updates on several threads are reduced as
+// merge() and capInside() would (the largest P(I_v) and visibility, the bound and the prior the
+// same on every thread: they depend only on the voxel and the frame). Returns the voxels updated.
+std::size_t writeThreadUpdates(const std::vector<FrameUpdates>& threads, const VoxelIndex& origin,
+                               const Eigen::Vector3d& focus, const UpdateWriter& writer,
+                               VoxelMap* map) {
+  const BlockIndex origin_block = VoxelMap::blockOf(origin);
+  const std::size_t count = threads.size();
+  const int thread_count = static_cast<int>(count);
+  std::vector<std::vector<char>> updated(count);
+#pragma omp parallel for schedule(static, 1) num_threads(thread_count)
+  for (int t = 0; t < thread_count; ++t) updated[t] = threads[t].updatedBlocks(origin_block);
+  // Every block with an updated voxel, once (the first thread that has it lists it).
+  std::vector<BlockIndex> blocks;
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::vector<BlockIndex>& own = threads[t].slots().blocks();
+    for (std::size_t n = 0; n < own.size(); ++n) {
+      if (!updated[t][n]) continue;
+      bool listed = false;
+      for (std::size_t e = 0; e < t && !listed; ++e) {
+        const std::uint32_t number = threads[e].slots().numberOf(own[n], origin_block);
+        listed = number != FrameUpdates::Slots::kNone && updated[e][number];
+      }
+      if (!listed) blocks.push_back(own[n]);
+    }
+  }
+  if (blocks.empty()) return 0;
+  map->setFocus(focus);
+  std::atomic<std::size_t> written{0};
+  map->updateBlocks(blocks, [&](const BlockIndex& block_index, VoxelBlock& block) {
+    std::vector<const std::uint32_t*> slots(count, nullptr);
+    for (std::size_t t = 0; t < count; ++t) {
+      const std::uint32_t number = threads[t].slots().numberOf(block_index, origin_block);
+      if (number != FrameUpdates::Slots::kNone) slots[t] = threads[t].slots().valuesOf(number);
+    }
+    std::size_t here = 0;
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      StereoVoxelUpdate update;
+      bool found = false;
+      for (std::size_t t = 0; t < count; ++t) {
+        if (slots[t] == nullptr || slots[t][linear] == FrameUpdates::kNoEntry) continue;
+        const StereoVoxelUpdate theirs = threads[t].cappedEntry(slots[t][linear]);
+        if (!found) {
+          update = theirs;
+          found = true;
+          continue;
+        }
+        update.p_inside = std::max(update.p_inside, theirs.p_inside);
+        update.visibility = std::max(update.visibility, theirs.visibility);
+      }
+      // A voxel looked up where the visibility fell below q_min was entered but never updated.
+      if (!found || !(update.visibility > 0)) continue;
+      writer.write(update, linear, &block);
+      ++here;
+    }
+    written += here;
+  });
+  return written;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -632,7 +760,8 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
     const std::vector<RayTarget>* given_ends, std::size_t point_count,
     const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
-    std::vector<StereoVoxelUpdate>* updates, const MeasuredSurface* surface) const {
+    std::vector<StereoVoxelUpdate>* updates, const MeasuredSurface* surface,
+    VoxelMap* write_to) const {
   updates->clear();
   StereoIntegrationStats stats;
   stats.points = point_count;
@@ -733,6 +862,17 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     hits += caster.counters().cache_hits;
     invisible += caster.counters().rays_invisible;
   }
+  stats.skipped_points = skipped;
+  stats.rays = config_.bundle_rays ? bundles.size() : point_count - skipped;
+  stats.merged_points = stats.points - skipped - stats.rays;
+  stats.voxel_visits = visits;
+  stats.cache_hits = hits;
+  stats.rays_invisible = invisible;
+  if (write_to != nullptr) {
+    stats.updated_voxels = writeThreadUpdates(per_thread, frame.origin_voxel, sensor_origin,
+                                              UpdateWriter(config_, *write_to), write_to);
+    return stats;
+  }
   for (int t = 1; t < threads; ++t) per_thread[0].merge(per_thread[t], frame.origin_voxel);
   per_thread[0].capInside();
   *updates = std::move(per_thread[0].entries());
@@ -740,12 +880,6 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   updates->erase(std::remove_if(updates->begin(), updates->end(),
                                 [](const StereoVoxelUpdate& u) { return !(u.visibility > 0); }),
                  updates->end());
-  stats.skipped_points = skipped;
-  stats.rays = config_.bundle_rays ? bundles.size() : point_count - skipped;
-  stats.merged_points = stats.points - skipped - stats.rays;
-  stats.voxel_visits = visits;
-  stats.cache_hits = hits;
-  stats.rays_invisible = invisible;
   stats.updated_voxels = updates->size();
   return stats;
 }
@@ -761,27 +895,10 @@ void VisibilityStereoIntegrator::apply(const std::vector<StereoVoxelUpdate>& upd
     if (inserted) blocks.push_back(block);
     it.value().push_back(i);
   }
-  const float min_log_odds = map->minLogOdds();
-  const float max_log_odds = map->maxLogOdds();
-  const bool octomap = config_.method == StereoIntegrationMethod::kOctomap;
-  const float hit = map->model().hitLogOdds();
-  const float miss = map->model().missLogOdds();
+  const UpdateWriter writer(config_, *map);
   map->updateBlocks(blocks, [&](const BlockIndex& block_index, VoxelBlock& block) {
     for (std::uint32_t i : by_block.find(packKey(block_index))->second) {
-      const StereoVoxelUpdate& update = updates[i];
-      const int linear = VoxelMap::linearIndexInBlock(update.index);
-      if (octomap) {
-        block.update(linear, update.p_inside >= 1.0f ? hit : miss, min_log_odds, max_log_odds);
-        continue;
-      }
-      const float old_value = block.log_odds[linear];
-      const double p_unknown = update.prior >= 0 ? update.prior : config_.unknown_occupancy;
-      const double p_old =
-          VoxelBlock::isKnown(old_value) ? probabilityFromLogOdds(old_value) : p_unknown;
-      const double p_new =
-          occupancyAfterInterpolatedMeasurement(p_old, update.p_inside, update.visibility, config_);
-      // Clamped like OctoMap, to the map's [clamp_min, clamp_max].
-      block.set(linear, std::clamp(logit(p_new), min_log_odds, max_log_odds));
+      writer.write(updates[i], VoxelMap::linearIndexInBlock(updates[i].index), &block);
     }
   });
 }
@@ -803,14 +920,9 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrateRays(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
     const std::vector<RayTarget>* ends, std::size_t point_count,
     const Eigen::Vector3d& sensor_origin, VoxelMap* map, const MeasuredSurface* surface) const {
-  std::vector<StereoVoxelUpdate> updates;
-  const StereoIntegrationStats stats = computeUpdates(
-      points_in_map, range_sigmas, ends, point_count, sensor_origin, *map, &updates, surface);
-  if (!updates.empty()) {
-    map->setFocus(sensor_origin);
-    apply(updates, map);
-  }
-  return stats;
+  std::vector<StereoVoxelUpdate> unused;
+  return computeUpdates(points_in_map, range_sigmas, ends, point_count, sensor_origin, *map,
+                        &unused, surface, map);
 }
 
 void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& disparity,

@@ -713,28 +713,41 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointForm) {
 // Both must give the same rays: the same map bit for bit and the same counts, at every input
 // resolution, bundled or not, on one thread or two. The image is a tilted plane with holes,
 // near-zero disparities (dropped as uncertain) and a patch of wrong disparity.
-TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPath) {
-  constexpr int kWidth = 96, kHeight = 72;
-  std::vector<float> disparity(kWidth * kHeight);
-  std::mt19937 random(3);
-  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-  for (int v = 0; v < kHeight; ++v) {
-    for (int u = 0; u < kWidth; ++u) {
-      float d = 30.0f + 0.2f * u - 0.1f * v + 0.3f * (uniform(random) - 0.5f);
-      const float roll = uniform(random);
-      if (roll < 0.1f) d = std::nanf("");
-      if (roll >= 0.1f && roll < 0.13f) d = 0.002f;           // sigma_z / z = 250: dropped
-      if (u >= 40 && u < 52 && v >= 20 && v < 32) d += 6.0f;  // a patch shifted towards the camera
-      disparity[v * kWidth + u] = d;
-    }
-  }
-  const DisparityImageView view{kWidth, kHeight, disparity.data(), 0};
-  const StereoCamera camera{80.0, 80.0, 48.0, 36.0, 0.12};
+// A slanted plane's disparity with noise, holes, values dropped as too uncertain and a patch
+// shifted towards the camera, seen from a tilted camera away from the map's origin.
+struct NoisyPlaneFrame {
+  static constexpr int kWidth = 96, kHeight = 72;
+  std::vector<float> disparity = std::vector<float>(kWidth * kHeight);
+  StereoCamera camera{80.0, 80.0, 48.0, 36.0, 0.12};
   Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
-  T_map_camera.linear() =
-      Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix() *
-      (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished();
-  T_map_camera.translation() = Eigen::Vector3d(0.31, -0.47, 1.13);
+
+  NoisyPlaneFrame() {
+    std::mt19937 random(3);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    for (int v = 0; v < kHeight; ++v) {
+      for (int u = 0; u < kWidth; ++u) {
+        float d = 30.0f + 0.2f * u - 0.1f * v + 0.3f * (uniform(random) - 0.5f);
+        const float roll = uniform(random);
+        if (roll < 0.1f) d = std::nanf("");
+        if (roll >= 0.1f && roll < 0.13f) d = 0.002f;  // sigma_z / z = 250: dropped
+        if (u >= 40 && u < 52 && v >= 20 && v < 32)
+          d += 6.0f;  // a patch shifted towards the camera
+        disparity[v * kWidth + u] = d;
+      }
+    }
+    T_map_camera.linear() =
+        Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix() *
+        (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished();
+    T_map_camera.translation() = Eigen::Vector3d(0.31, -0.47, 1.13);
+  }
+  DisparityImageView view() const { return {kWidth, kHeight, disparity.data(), 0}; }
+};
+
+TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPath) {
+  const NoisyPlaneFrame noisy;
+  const DisparityImageView view = noisy.view();
+  const StereoCamera& camera = noisy.camera;
+  const Eigen::Isometry3d& T_map_camera = noisy.T_map_camera;
   const int threads_before = omp_get_max_threads();
   for (const InputResolution input :
        {InputResolution::kFull, InputResolution::kHalf, InputResolution::kQuarter}) {
@@ -776,6 +789,54 @@ TEST(VisibilityStereoIntegratorTest, DisparityImageFormEqualsPointFormOnEveryPat
           EXPECT_EQ(from_image.logOdds(index), std::optional<float>(value));
         });
       }
+    }
+  }
+  omp_set_num_threads(threads_before);
+}
+
+// integrate() writes each block straight from the threads' tables; computeUpdates() merges the
+// tables into one list first, which apply() writes: the same maps, on one to three threads.
+TEST(VisibilityStereoIntegratorTest, WritingFromTheThreadsTablesEqualsMergingThenApplying) {
+  const NoisyPlaneFrame noisy;
+  const int threads_before = omp_get_max_threads();
+  for (const bool bundle : {true, false}) {
+    for (const int threads : {1, 2, 3}) {
+      SCOPED_TRACE(std::string(bundle ? "bundled" : "per ray") + ", threads " +
+                   std::to_string(threads));
+      omp_set_num_threads(threads);
+      VisibilityStereoConfig config = visibilityStereoConfigFor(StereoParameterSet::kMeasured);
+      config.bundle_rays = bundle;
+      const VisibilityStereoIntegrator integrator(config);
+      std::vector<Eigen::Vector3f> points;
+      std::vector<float> sigmas;
+      integrator.disparityToMapPoints(noisy.view(), noisy.camera, noisy.T_map_camera, &points,
+                                      &sigmas, nullptr);
+      // 1 cm voxels: the plane at about 0.3 m gives over 256 bundled rays a thread.
+      VoxelMapConfig fine = mapConfig();
+      fine.resolution = 0.01;
+      const MeasuredSurface surface =
+          integrator.measuredSurface(noisy.view(), noisy.camera, noisy.T_map_camera, 0.01);
+      const Eigen::Vector3d origin = noisy.T_map_camera.translation();
+      VoxelMap written(fine), merged(fine);
+      // Three frames, the camera stepping aside: later frames update voxels the map knows.
+      for (int frame = 0; frame < 3; ++frame) {
+        const Eigen::Vector3f step(0.0f, 0.02f * frame, 0.0f);
+        std::vector<Eigen::Vector3f> moved = points;
+        for (Eigen::Vector3f& p : moved) p += step;
+        const Eigen::Vector3d moved_origin = origin + step.cast<double>();
+        const StereoIntegrationStats stats =
+            integrator.integrate(moved, sigmas, moved_origin, &written, &surface);
+        std::vector<StereoVoxelUpdate> updates;
+        integrator.computeUpdates(moved, sigmas, moved_origin, merged, &updates, &surface);
+        integrator.apply(updates, &merged);
+        EXPECT_EQ(stats.updated_voxels, updates.size());
+        EXPECT_GE(stats.rays, 256u * threads);
+        EXPECT_GT(updates.size(), 50u);
+      }
+      EXPECT_EQ(written.knownVoxelCount(), merged.knownVoxelCount());
+      merged.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+        EXPECT_EQ(written.logOdds(index), std::optional<float>(value));
+      });
     }
   }
   omp_set_num_threads(threads_before);
