@@ -15,6 +15,20 @@
 
 namespace occupancy_fusion {
 
+// Whether the processor runs the AVX2 paths (asked once).
+inline bool processorHasAvx2() {
+#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+#else
+  return false;
+#endif
+}
+
+}  // namespace occupancy_fusion
+
+namespace occupancy_fusion {
+
 using FloatQuad = float __attribute__((vector_size(4 * sizeof(float))));
 // Eight floats: one AVX register, for the functions built for AVX2 beside the baseline ones.
 using FloatOctet = float __attribute__((vector_size(8 * sizeof(float))));

@@ -184,17 +184,13 @@ __attribute__((target("avx2"))) void localPairsOnOctets(const DisparityImageView
                                                         LocalPairs* pairs) {
   localPairsOfWidth<8>(image, u, step, v, reach, references, limit, pairs);
 }
-bool hasAvx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
 #endif
 
 void localPairsOfLanes(const DisparityImageView& image, int u, int step, int v, int reach,
                        const float* references, float limit,
                        MedianNetwork::Instructions instructions, LocalPairs* pairs) {
 #ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
-  if (instructions == MedianNetwork::Instructions::kWidest && hasAvx2()) {
+  if (instructions == MedianNetwork::Instructions::kWidest && processorHasAvx2()) {
     localPairsOnOctets(image, u, step, v, reach, references, limit, pairs);
     return;
   }

@@ -55,22 +55,10 @@ std::vector<std::pair<int, int>> prunedTo(const std::vector<std::pair<int, int>>
 
 }  // namespace
 
-namespace {
-
-bool hasAvx2() {
-#ifdef OCCUPANCY_FUSION_HAS_AVX2_PATH
-  return __builtin_cpu_supports("avx2");
-#else
-  return false;
-#endif
-}
-
-}  // namespace
-
 MedianNetwork::MedianNetwork(int slots, Instructions instructions)
     : slots_(slots),
       middle_(slots / 2),
-      use_octets_(instructions == Instructions::kWidest && hasAvx2()) {
+      use_octets_(instructions == Instructions::kWidest && processorHasAvx2()) {
   if (slots < 1 || slots > kMaxSlots) {
     throw std::invalid_argument("MedianNetwork: slots must be in [1, " + std::to_string(kMaxSlots) +
                                 "], got " + std::to_string(slots));

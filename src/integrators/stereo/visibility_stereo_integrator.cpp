@@ -179,10 +179,7 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   // P(I_v) of every entry at most its measured bound: min(max over rays, bound) as the bound
   // applied after the reduction.
   void capInside() {
-    for (std::size_t i = 0; i < entries_.size(); ++i) {
-      const float cap = readings_[i].inside_cap;
-      if (cap < entries_[i].p_inside) entries_[i].p_inside = cap;
-    }
+    for (std::uint32_t i = 0; i < entries_.size(); ++i) entries_[i] = cappedEntry(i);
   }
   // Reduction to one update per voxel: the largest P(I_v) (a hit wins over a
   // miss, as in OctoMap) and the largest visibility (see reduce()).
