@@ -53,7 +53,10 @@ class BlockChangeLog {
   std::deque<Entry> entries_;  // in version order
   std::uint64_t start_ = 1;    // versions before this are no longer fully in the log
   std::size_t compact_at_ = kMinCompactionSize;
-  static constexpr std::size_t kMinCompactionSize = 256;
+  // Small, so that a small map's log stays small beside its blocks (a few dozen blocks written
+  // every frame would otherwise keep up to this many entries); compacting a log this short costs
+  // next to nothing.
+  static constexpr std::size_t kMinCompactionSize = 32;
 };
 
 }  // namespace occupancy_fusion
