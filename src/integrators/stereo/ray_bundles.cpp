@@ -49,7 +49,11 @@ void groupByEndVoxel(const std::vector<RayTarget>& ends, std::uint32_t first, st
   // Room for a bundle per eight points up front: growing the table rehashes every entry again.
   out->of_voxel.reserve((last - first) / 8);
   out->list.reserve((last - first) / 8);
+  // The bundle of the points' run of one end voxel is kept in locals and written back when the
+  // run ends: the nearer / farther choices then take no branch (a point's range within its voxel
+  // is noise to a branch predictor).
   std::uint64_t last_key = RayTarget::kUnusable;
+  Bundle current{};
   Bundle* bundle = nullptr;
   for (std::uint32_t i = first; i < last; ++i) {
     const auto [key, squared_range] = ends[i];
@@ -58,21 +62,22 @@ void groupByEndVoxel(const std::vector<RayTarget>& ends, std::uint32_t first, st
       continue;
     }
     if (key != last_key) {
+      if (bundle != nullptr) *bundle = current;
       const auto [it, inserted] =
           out->of_voxel.try_emplace(key, static_cast<std::uint32_t>(out->list.size()));
       if (inserted) out->list.push_back({key, i, i, squared_range, squared_range});
       last_key = key;
       bundle = &out->list[it->second];
+      current = *bundle;
     }
-    if (squared_range < bundle->nearest_squared_range) {  // ties: the first point
-      bundle->nearest = i;
-      bundle->nearest_squared_range = squared_range;
-    }
-    if (squared_range > bundle->farthest_squared_range) {
-      bundle->farthest = i;
-      bundle->farthest_squared_range = squared_range;
-    }
+    const bool nearer = squared_range < current.nearest_squared_range;  // ties: the first point
+    current.nearest = nearer ? i : current.nearest;
+    current.nearest_squared_range = nearer ? squared_range : current.nearest_squared_range;
+    const bool farther = squared_range > current.farthest_squared_range;
+    current.farthest = farther ? i : current.farthest;
+    current.farthest_squared_range = farther ? squared_range : current.farthest_squared_range;
   }
+  if (bundle != nullptr) *bundle = current;
 }
 
 // Appends a later part's bundles: a voxel already there keeps its place and takes the later
