@@ -25,10 +25,6 @@ inline bool processorHasAvx2() {
 #endif
 }
 
-}  // namespace occupancy_fusion
-
-namespace occupancy_fusion {
-
 using FloatQuad = float __attribute__((vector_size(4 * sizeof(float))));
 // Eight floats: one AVX register, for the functions built for AVX2 beside the baseline ones.
 using FloatOctet = float __attribute__((vector_size(8 * sizeof(float))));

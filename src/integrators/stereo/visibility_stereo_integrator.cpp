@@ -184,9 +184,11 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   // Reduction to one update per voxel: the largest P(I_v) (a hit wins over a
   // miss, as in OctoMap) and the largest visibility (see reduce()).
   void reduce(std::uint32_t entry, float p_inside, float visibility) {
-    StereoVoxelUpdate& update = entries_[entry];
-    update.p_inside = std::max(update.p_inside, p_inside);
-    update.visibility = std::max(update.visibility, visibility);
+    reduceInto(&entries_[entry], p_inside, visibility);
+  }
+  static void reduceInto(StereoVoxelUpdate* update, float p_inside, float visibility) {
+    update->p_inside = std::max(update->p_inside, p_inside);
+    update->visibility = std::max(update->visibility, visibility);
   }
   void merge(const FrameUpdates& other, const VoxelIndex& origin) {
     for (std::size_t i = 0; i < other.entries_.size(); ++i) {
@@ -717,8 +719,7 @@ std::size_t writeThreadUpdates(const std::vector<FrameUpdates>& threads, const V
           found = true;
           continue;
         }
-        update.p_inside = std::max(update.p_inside, theirs.p_inside);
-        update.visibility = std::max(update.visibility, theirs.visibility);
+        FrameUpdates::reduceInto(&update, theirs.p_inside, theirs.visibility);
       }
       // A voxel looked up where the visibility fell below q_min was entered but never updated.
       if (!found || !(update.visibility > 0)) continue;
