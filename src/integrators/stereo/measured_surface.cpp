@@ -57,9 +57,11 @@ void MeasuredSurfaceConfig::validate() const {
 namespace {
 
 constexpr float kNoSurface = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr int kMinLocalPairs = 4;  // fewer inliers in the small window: the wide median stands
 
-bool isValidDisparity(float d) { return std::isfinite(d) && d > 0; }
+// Finite and positive, without a call: false for NaN and +inf as for 0 and negative values.
+inline bool isValidDisparity(float d) { return d > 0 && d <= std::numeric_limits<float>::max(); }
 
 }  // namespace
 
@@ -253,13 +255,22 @@ class MeasuredSurface::SampleLattice {
       : pad_(pad), columns_((image.width - 1) / step + 1 + 2 * pad + extra) {
     const int rows = (image.height - 1) / step + 1 + 2 * pad;
     samples_.assign(static_cast<std::size_t>(columns_) * rows, kNoSurface);
+    const int width = (image.width - 1) / step + 1;
+    // The smallest float at least `least`, so that the float comparison below is the double one.
+    float least_f = static_cast<float>(least);
+    if (static_cast<double>(least_f) < least) least_f = std::nextafter(least_f, kInfinity);
     for (int j = 0; j * step < image.height; ++j) {
-      for (int i = 0; i * step < image.width; ++i) {
-        const float d = image.at(i * step, j * step);
-        if (!isValidDisparity(d)) continue;
-        samples_[index(i, j)] = d;
-        if (d >= least) smallest_ = std::min(smallest_, d);
+      // Selects, not branches: holes and the range limit come in no order a predictor learns.
+      const float* pixels = image.row(j * step);
+      float* samples = &samples_[index(0, j)];
+      float smallest = smallest_;
+      for (int i = 0; i < width; ++i) {
+        const float d = pixels[i * step];
+        const bool valid = isValidDisparity(d);
+        samples[i] = valid ? d : kNoSurface;
+        smallest = std::min(smallest, valid && d >= least_f ? d : kInfinity);
       }
+      smallest_ = smallest;
     }
   }
   float smallest() const { return smallest_; }  // +inf: none
