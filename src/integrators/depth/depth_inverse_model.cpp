@@ -18,9 +18,7 @@ constexpr double kGaussianSupportSigmas = 8.0;
 
 DepthInverseModel::DepthInverseModel(const PyramidDepthConfig& config)
     : k_(config.k),
-      sigma_(config.sigma),
-      sigma_quadratic_(config.sigma_quadratic),
-      behind_sigmas_(config.unknown_behind_sigmas),
+      reach_{config.sigma, config.sigma_quadratic, config.unknown_behind_sigmas},
       far_in_front_log_odds_(static_cast<float>(std::log(0.3 / 0.7))) {
   config.validate();
 }
@@ -35,11 +33,11 @@ double DepthInverseModel::probability(double distance, double measured) const {
 }
 
 std::optional<double> DepthInverseModel::logOddsAtOffset(double offset) const {
-  if (sigma_quadratic_ != 0.0) return std::nullopt;
+  if (reach_.sigma_quadratic != 0.0) return std::nullopt;
   if (offset < -kGaussianSupportSigmas) return far_in_front_log_odds_;
   if (offset > kGaussianSupportSigmas) return 0.0;
   const double gaussian = std::exp(-0.5 * offset * offset);
-  const double amplitude = k_ / (sigma_ * kSqrtTwoPi);
+  const double amplitude = k_ / (reach_.sigma * kSqrtTwoPi);
   const double p = offset <= 0.0 ? 0.3 + (amplitude + 0.2) * gaussian : 0.5 + amplitude * gaussian;
   return std::log(p / (1.0 - p));
 }

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <limits>
 #include <vector>
 
@@ -202,6 +201,15 @@ bool DistanceBuckets::closest(std::size_t cell, int level, float* kept) const {
 
 namespace {
 
+// The reach of `farthest` rounded up to a float (-inf stays: no valid cell informs anything), so
+// that a voxel farther than the float is farther than the reach.
+float reachAtLeast(const MeasurementReach& reach, float farthest) {
+  if (farthest == -kInfinity) return farthest;
+  const double exact = reach.of(farthest);
+  const float rounded = static_cast<float>(exact);
+  return static_cast<double>(rounded) < exact ? std::nextafter(rounded, kInfinity) : rounded;
+}
+
 // The layers' storage of the frames a thread built before: M alone is 1.2 MB at 640 x 480, and
 // glibc maps a block that large anew for each allocation, so every frame would fault its pages
 // in again (a page fault per 4 KiB).
@@ -231,21 +239,23 @@ std::vector<float> takeLayerBuffer(std::size_t size) {
 
 DistancePyramid::~DistancePyramid() {
   std::vector<std::vector<float>>& spare = spareLayers();
-  for (Layer& layer : layers_) {
-    if (layer.cells.capacity() > 0 && spare.size() < kMaxSpareLayers) {
-      spare.push_back(std::move(layer.cells));
+  for (std::vector<Layer>* layers : {&layers_, &squares_}) {
+    for (Layer& layer : *layers) {
+      if (layer.cells.capacity() > 0 && spare.size() < kMaxSpareLayers) {
+        spare.push_back(std::move(layer.cells));
+      }
     }
   }
 }
 
 DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera,
                                  double t0, int levels, double max_range,
-                                 PyramidSelection selection,
-                                 const std::function<double(double)>& reach_of_farthest)
+                                 PyramidSelection selection, const MeasurementReach* reach)
     : thresholds_(std::max(levels, 1)),
       scales_(thresholds_.size()),
       inverse_gaps_(thresholds_.size(), 0.0),
-      layers_(thresholds_.size()) {
+      layers_(thresholds_.size()),
+      squares_(thresholds_.size()) {
   for (std::size_t level = 0; level < thresholds_.size(); ++level) {
     thresholds_[level] = t0 / static_cast<double>(1 << level);
     scales_[level] = 1.0 / static_cast<double>(1 << level);
@@ -299,7 +309,47 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
   if (selection == PyramidSelection::kMinimum) {
     buildMinimumLayers();
   } else {
-    buildClosestLayers(firstReadLevel(reach_of_farthest));
+    const int first_read_level = firstReadLevel(reach);
+    buildClosestLayers(first_read_level);
+    if (reach != nullptr) buildSquareReaches(first_read_level, *reach);
+  }
+}
+
+void DistancePyramid::buildSquareReaches(int first_level, const MeasurementReach& reach) {
+  // A voxel that reaches the layers lies within the reach of the frame's farthest measurement,
+  // so it reads no layer finer than first_level (firstReadLevel): those get no table.
+  for (int level = std::max(first_level, 0); level < levels(); ++level) {
+    const Layer& layer = layers_[level];
+    Layer& squares = squares_[level];
+    squares.width = layer.width + 1;
+    squares.height = layer.height + 1;
+    const std::size_t size = static_cast<std::size_t>(squares.width) * squares.height;
+    squares.cells = takeLayerBuffer(size);
+    squares.cells.resize(size);  // every cell is written below
+    const bool parallel = static_cast<long>(size) >= kParallelPixels;
+#pragma omp parallel if (parallel)
+    {
+      // Row r of the table covers the layer's rows r - 1 and r: their larger value per column,
+      // then the larger of two neighbouring columns. NaN never compares larger; -inf pads.
+      std::vector<float> columns(static_cast<std::size_t>(layer.width) + 2, -kInfinity);
+#pragma omp for schedule(static)
+      for (int r = 0; r < squares.height; ++r) {
+        const float* above =
+            r >= 1 ? &layer.cells[static_cast<std::size_t>(r - 1) * layer.width] : nullptr;
+        const float* below =
+            r < layer.height ? &layer.cells[static_cast<std::size_t>(r) * layer.width] : nullptr;
+        for (int u = 0; u < layer.width; ++u) {
+          float farthest = -kInfinity;
+          if (above != nullptr) farthest = above[u] > farthest ? above[u] : farthest;
+          if (below != nullptr) farthest = below[u] > farthest ? below[u] : farthest;
+          columns[u + 1] = farthest;
+        }
+        float* row = &squares.cells[static_cast<std::size_t>(r) * squares.width];
+        for (int c = 0; c < squares.width; ++c) {
+          row[c] = reachAtLeast(reach, std::max(columns[c], columns[c + 1]));
+        }
+      }
+    }
   }
 }
 
@@ -349,12 +399,12 @@ void DistancePyramid::buildMinimumLayers() {
   }
 }
 
-int DistancePyramid::firstReadLevel(const std::function<double(double)>& reach_of_farthest) const {
-  if (!reach_of_farthest) return 0;
+int DistancePyramid::firstReadLevel(const MeasurementReach* reach_model) const {
+  if (reach_model == nullptr) return 0;
   if (farthest_ == 0.0f) return levels();  // no valid pixel: no layer is read
   // A voxel is read at its bracketing level i (t_{i+1} < distance <= t_i) and i + 1; no voxel
   // farther than the reach is informed, so the nearest informed voxels decide (Eq. 12).
-  const double reach = reach_of_farthest(farthest_);
+  const double reach = reach_model->of(farthest_);
   int level = 0;
   while (level + 1 < levels() && reach <= threshold(level + 1)) ++level;
   return level;

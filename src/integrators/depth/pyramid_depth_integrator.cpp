@@ -31,13 +31,9 @@ DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
   const PyramidSelection selection = config_.method == DepthMethod::kAndert
                                          ? PyramidSelection::kMinimum
                                          : PyramidSelection::kClosestToThreshold;
-  // The farthest voxel any measurement informs (Model::informs grows with the measurement).
-  const auto reach_of_farthest = [this](double farthest) {
-    return farthest + config_.unknown_behind_sigmas * model_.sigmaAt(farthest);
-  };
   return DepthFrame{
       camera, T_map_camera, T_map_camera.inverse(), resolution,
-      DistancePyramid(depth, camera, t0, levels, config_.max_range, selection, reach_of_farthest)};
+      DistancePyramid(depth, camera, t0, levels, config_.max_range, selection, &model_.reach())};
 }
 
 namespace {

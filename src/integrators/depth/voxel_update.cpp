@@ -112,6 +112,17 @@ inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
   return result;
 }
 
+inline bool PyramidDepthIntegrator::layerMayInform(const DepthFrame& frame, int level,
+                                                   double pixel_u, double pixel_v,
+                                                   double distance) const {
+  // gatherCells' cell position (Eq. 14): reachOfSquare bounds the four cells it weighs.
+  const DistancePyramid& pyramid = frame.pyramid;
+  const double scale = pyramid.scale(level);
+  const int u0 = floorToInt((pixel_u + 0.5) * scale - 0.5);
+  const int v0 = floorToInt((pixel_v + 0.5) * scale - 0.5);
+  return distance <= pyramid.reachOfSquare(level, u0, v0);
+}
+
 inline float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells,
                                                      double distance) const {
   double weighted = 0.0;
@@ -129,10 +140,16 @@ inline float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, dou
   const int level = bracketingLevel(pyramid, distance);
   // Beyond t_0, or nearer than the last layer's t: one layer alone.
   if (level < 0 || level + 1 >= pyramid.levels()) {
+    if (!layerMayInform(frame, std::max(level, 0), u, v, distance)) return kNaN;
     const LayerCells only = gatherCells(frame, std::max(level, 0), u, v, distance);
     if (!only.valid() || !only.informs) return kNaN;
     if (farInFront(distance, only.nearest)) return model_.farInFrontLogOdds();
     return bilinearLogOdds(only, distance);
+  }
+  // Behind every surface both layers see (a third of the voxels at 0.02-0.05 m): no gathers.
+  if (!layerMayInform(frame, level, u, v, distance) &&
+      !layerMayInform(frame, level + 1, u, v, distance)) {
+    return kNaN;
   }
   const LayerCells fine = gatherCells(frame, level, u, v, distance);
   const LayerCells coarse = gatherCells(frame, level + 1, u, v, distance);

@@ -2,6 +2,7 @@
 // (pyramid layers) against values worked out by hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -156,26 +157,64 @@ TEST(DistancePyramid, Eq10KeepsTheMeasurementClosestToEachLayersDistance) {
 TEST(DistancePyramid, LayersFinerThanAnyInformedVoxelReadsAreLeftInvalid) {
   const std::vector<float> depth = mixedDepthImage();
   const DepthImageView view{4, 4, depth.data()};
-  double farthest_seen = 0.0;
-  // Reach 9 / 8 m <= t_2 = 2 m: every informed voxel reads layer 2 (and layer 0 beyond t_0),
-  // never layer 1 (t = 4 m), which is left invalid.
-  const DistancePyramid near(view, flatCamera(4, 4), 8.0, 3, 20.0,
-                             PyramidSelection::kClosestToThreshold, [&](double farthest) {
-                               farthest_seen = farthest;
-                               return farthest / 8.0;
-                             });
-  EXPECT_NEAR(farthest_seen, 9.0, 1e-5);  // the farthest valid distance, not the invalid 50 m
+  // t0 = 40 so t1 = 20 and t2 = 10. Reach of the farthest valid distance (9 m) 9 + 3 x 0.1 m
+  // <= t_2: every informed voxel reads layer 2 (and layer 0 beyond t_0), never layer 1, which is
+  // left invalid. (Had the invalid 50 m counted, its reach beyond t_0 would need every layer.)
+  const MeasurementReach near_reach{0.1, 0.0, 3.0};
+  const DistancePyramid near(view, flatCamera(4, 4), 40.0, 3, 20.0,
+                             PyramidSelection::kClosestToThreshold, &near_reach);
   for (int v = 0; v < 2; ++v) {
     for (int u = 0; u < 2; ++u) EXPECT_TRUE(std::isnan(near.at(1, u, v))) << u << " " << v;
   }
-  EXPECT_NEAR(near.at(2, 0, 0), 2.1f, 1e-5);
+  EXPECT_FLOAT_EQ(near.at(2, 0, 0), 9.0f);  // closest to t_2 = 10
   EXPECT_FLOAT_EQ(near.at(0, 1, 0), 3.9f);
-  // Reach 9 / 4 m lies in (t_2, t_1]: such voxels read layers 1 and 2, so layer 1 is built.
-  const DistancePyramid farther(view, flatCamera(4, 4), 8.0, 3, 20.0,
-                                PyramidSelection::kClosestToThreshold,
-                                [](double farthest) { return farthest / 4.0; });
-  EXPECT_NEAR(farther.at(1, 0, 0), 3.9f, 1e-5);
-  EXPECT_NEAR(farther.at(1, 0, 1), 2.1f, 1e-5);
+  // Reach 9 + 3 x 1 m lies in (t_2, t_1]: such voxels read layers 1 and 2, so layer 1 is built.
+  const MeasurementReach far_reach{1.0, 0.0, 3.0};
+  const DistancePyramid farther(view, flatCamera(4, 4), 40.0, 3, 20.0,
+                                PyramidSelection::kClosestToThreshold, &far_reach);
+  EXPECT_FLOAT_EQ(farther.at(1, 0, 0), 5.0f);  // closest to t_1 = 20 of 1, 3.9, 5, 4.5
+  EXPECT_FLOAT_EQ(farther.at(1, 0, 1), 9.0f);
+}
+
+TEST(DistancePyramid, ReachOfSquareBoundsTheFourCellsAroundEachPosition) {
+  const std::vector<float> depth = mixedDepthImage();
+  const DepthImageView view{4, 4, depth.data()};
+  const MeasurementReach reach{0.1, 0.02, 3.0};  // reach(9 m) = 9 + 3 (0.1 + 1.62) in (t_2, t_1]
+  const DistancePyramid pyramid(view, flatCamera(4, 4), 40.0, 3, 20.0,
+                                PyramidSelection::kClosestToThreshold, &reach);
+  // Layer 0 is read by no informed voxel: no table, no bound.
+  EXPECT_EQ(pyramid.reachOfSquare(0, 1, 1), std::numeric_limits<float>::infinity());
+  for (int level = 1; level < pyramid.levels(); ++level) {
+    for (int v = -1; v < pyramid.height(level); ++v) {
+      for (int u = -1; u < pyramid.width(level); ++u) {
+        // Independently: the farthest valid cell of the (up to) four inside the layer.
+        float farthest = -std::numeric_limits<float>::infinity();
+        for (int cv = v; cv <= v + 1; ++cv) {
+          for (int cu = u; cu <= u + 1; ++cu) {
+            if (cu < 0 || cv < 0 || cu >= pyramid.width(level) || cv >= pyramid.height(level))
+              continue;
+            const float cell = pyramid.at(level, cu, cv);
+            if (!std::isnan(cell)) farthest = std::max(farthest, cell);
+          }
+        }
+        const float bound = pyramid.reachOfSquare(level, u, v);
+        SCOPED_TRACE(testing::Message() << "level " << level << " u " << u << " v " << v);
+        if (farthest == -std::numeric_limits<float>::infinity()) {
+          EXPECT_EQ(bound, farthest);  // no valid cell: nothing informed
+          continue;
+        }
+        // The smallest float at least the reach: no wider than it must be.
+        const double exact = reach.of(farthest);
+        EXPECT_GE(static_cast<double>(bound), exact);
+        EXPECT_LT(static_cast<double>(std::nextafter(bound, 0.0f)), exact);
+      }
+    }
+  }
+  // Layer 1 is [[5, 7], [9, none]] (closest to t_1 = 20; the lower right has no valid pixel).
+  EXPECT_EQ(pyramid.reachOfSquare(1, 1, 1), -std::numeric_limits<float>::infinity());
+  EXPECT_NEAR(pyramid.reachOfSquare(1, 1, 0), reach.of(7.0), 1e-5);
+  EXPECT_NEAR(pyramid.reachOfSquare(1, -1, -1), reach.of(5.0), 1e-5);
+  EXPECT_NEAR(pyramid.reachOfSquare(1, 0, 0), reach.of(9.0), 1e-5);
 }
 
 TEST(DistancePyramid, LevelCountStopsAtMinRangeOrOneCell) {

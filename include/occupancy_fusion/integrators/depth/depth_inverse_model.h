@@ -10,12 +10,23 @@
 
 namespace occupancy_fusion {
 
+// The farthest distance a measurement m informs (DepthInverseModel::informs): the voxels up to
+// behind_sigmas of Eq. 7's sigma(m) = sigma + sigma_quadratic m^2 behind it.
+struct MeasurementReach {
+  double sigma = 0.0, sigma_quadratic = 0.0, behind_sigmas = 0.0;
+  double of(double measured) const {
+    return measured + behind_sigmas * (sigma + sigma_quadratic * measured * measured);
+  }
+};
+
 // Eq. 7, for a voxel at distance z from the camera centre and a measured distance z_j.
 class DepthInverseModel {
  public:
   explicit DepthInverseModel(const PyramidDepthConfig& config);  // validates config
 
-  double sigmaAt(double measured) const { return sigma_ + sigma_quadratic_ * measured * measured; }
+  double sigmaAt(double measured) const {
+    return reach_.sigma + reach_.sigma_quadratic * measured * measured;
+  }
   double probability(double distance, double measured) const;  // Eq. 7
   float logOdds(double distance, double measured) const;       // log(p / (1 - p)) of Eq. 7
   // Eq. 7's log-odds as a function of the normalised offset x = (distance - measured) / sigma:
@@ -27,15 +38,12 @@ class DepthInverseModel {
   static double peakAmplitude(double k, double sigma);
   float farInFrontLogOdds() const { return far_in_front_log_odds_; }
   // False when the voxel lies too far behind the measurement to learn anything from it.
-  bool informs(double distance, double measured) const {
-    return distance <= measured + behind_sigmas_ * sigmaAt(measured);
-  }
+  bool informs(double distance, double measured) const { return distance <= reach_.of(measured); }
+  const MeasurementReach& reach() const { return reach_; }
 
  private:
   double k_;
-  double sigma_;
-  double sigma_quadratic_;
-  double behind_sigmas_;
+  MeasurementReach reach_;
   float far_in_front_log_odds_;  // logit(0.3): Eq. 7 in front of the Gaussian's support
 };
 

@@ -4,9 +4,9 @@
 #pragma once
 
 #include <cstddef>
-#include <functional>
 #include <vector>
 
+#include "occupancy_fusion/integrators/depth/depth_inverse_model.h"
 #include "occupancy_fusion/sensors/depth_image.h"
 
 namespace occupancy_fusion {
@@ -26,12 +26,12 @@ class DistanceBuckets;
 class DistancePyramid {
  public:
   // t0 = focal length x resolution: at that distance a voxel projects onto one pixel.
-  // reach_of_farthest (optional, kClosestToThreshold only): the farthest voxel distance the
-  // image's farthest measurement informs; scanned layers finer than any such voxel reads are
-  // then left invalid instead of built.
+  // reach (optional, kClosestToThreshold only): how far behind a measurement voxels are
+  // informed. Scanned layers finer than any informed voxel reads are then left invalid instead
+  // of built, and the layers that are read get reachOfSquare's tables.
   DistancePyramid(const DepthImageView& depth, const CameraIntrinsics& camera, double t0,
                   int levels, double max_range, PyramidSelection selection,
-                  const std::function<double(double)>& reach_of_farthest = {});
+                  const MeasurementReach* reach = nullptr);
   // Hands the layers' storage to the next pyramid built on this thread.
   ~DistancePyramid();
   DistancePyramid(const DistancePyramid&) = default;
@@ -56,6 +56,16 @@ class DistancePyramid {
     return layer.cells[static_cast<std::size_t>(v) * layer.width + u];
   }
   const float* cells(int level) const { return layers_[level].cells.data(); }  // row-major
+  // At least the reach (the constructor's) of the farthest valid cell among the layer's cells
+  // (u, v), (u + 1, v), (u, v + 1) and (u + 1, v + 1) that lie inside it, for -1 <= u < width
+  // and -1 <= v < height: the cells Eq. 15 can weigh for one voxel, so no cell informs a voxel
+  // farther than this. -inf where none is valid; +inf where the layer has no table (no reach
+  // given, Andert's layers, layers no informed voxel reads).
+  float reachOfSquare(int level, int u, int v) const {
+    const Layer& squares = squares_[level];
+    if (squares.cells.empty()) return kNoBound;
+    return squares.cells[static_cast<std::size_t>(v + 1) * squares.width + (u + 1)];
+  }
 
  private:
   struct Layer {
@@ -65,10 +75,12 @@ class DistancePyramid {
   };
   void sizeLayer(int level);
   void buildMinimumLayers();  // Andert: 2 x 2 minima of the layer below
-  // The first layer a voxel can read (see the constructor); 0 without reach_of_farthest.
-  int firstReadLevel(const std::function<double(double)>& reach_of_farthest) const;
+  // The first layer an informed voxel can read (see the constructor); 0 without a reach.
+  int firstReadLevel(const MeasurementReach* reach) const;
   // Eq. 10: fine layers scanned, coarse ones from distance buckets.
   void buildClosestLayers(int first_read_level);
+  // reachOfSquare's tables for the layers from first_level on.
+  void buildSquareReaches(int first_level, const MeasurementReach& reach);
   void fillBuckets(int level, DistanceBuckets* buckets) const;
   void takeClosest(const DistanceBuckets& buckets, int level);
   // The first measurement of the cell, in scan order, of least |d - target|.
@@ -80,8 +92,10 @@ class DistancePyramid {
   std::vector<double> thresholds_;  // t_i per layer, read for every voxel
   std::vector<double> scales_;      // 2^-i per layer, read for every voxel
   std::vector<double> inverse_gaps_;
-  std::vector<Layer> layers_;  // layers_[0] is M itself
-  float farthest_ = 0.0f;      // the farthest valid distance of M; 0: none valid
+  std::vector<Layer> layers_;   // layers_[0] is M itself
+  std::vector<Layer> squares_;  // per layer: (width + 1) x (height + 1), or empty
+  static constexpr float kNoBound = __builtin_huge_valf();
+  float farthest_ = 0.0f;  // the farthest valid distance of M; 0: none valid
 };
 
 }  // namespace occupancy_fusion

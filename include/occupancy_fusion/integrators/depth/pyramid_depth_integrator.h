@@ -81,7 +81,11 @@ class PyramidDepthIntegrator {
   };
   // The per-voxel functions return NaN for "no update" (no std::optional in the voxel loop).
   LayerCells gatherCells(const DepthFrame& frame, int level, double u, double v,
-                         double distance) const;                          // Eq. 14-15
+                         double distance) const;  // Eq. 14-15
+  // False where no cell of the layer that Eq. 15 can weigh for the voxel informs it: the
+  // farthest of the four cells around its position, read from one table before the gather.
+  bool layerMayInform(const DepthFrame& frame, int level, double u, double v,
+                      double distance) const;
   float bilinearLogOdds(const LayerCells& cells, double distance) const;  // Eq. 16
   float pyramidLogOdds(const DepthFrame& frame, double u, double v,
                        double distance) const;  // Eq. 12, 17
