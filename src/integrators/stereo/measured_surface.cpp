@@ -357,8 +357,15 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
   columns_ = (width_ - 1) / step_ + 1;
   rows_ = (height_ - 1) / step_ + 1;
   cells_.assign(static_cast<std::size_t>(columns_) * rows_, kNoSurface);
+  // The border's band (border_from_interior), where grid points lie inside it on both axes.
+  auto hasInside = [&](int size) {
+    return (sample + step_ - 1) / step_ * step_ <= size - 1 - sample;
+  };
+  band_px_ = config.border_from_interior && hasInside(width_) && hasInside(height_) ? sample : 0;
   measureNodes(disparity, lattice, config);
   extendByOneNode();
+  // Each pass reaches one grid point further out; corners take both directions.
+  for (int pass = 0; pass * step_ < band_px_; ++pass) extendByOneNode(true);
   findSteps(config.step_px);
 }
 
@@ -395,6 +402,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
   const int local_reach = config.local_window_px / 2;
   const float limit = static_cast<float>(config.inlier_px);
   forEachRow(rows_, [&](int j) {
+    if (inBand(columns_ / 2, j)) return;  // a row of the border's band: extrapolated
     std::vector<MedianNetwork::Lanes> rows(per_side * per_side);
     std::vector<float> patch;  // a border group's windows (windowsOfLanes)
     int counts[kLanes], sample_counts[kLanes];
@@ -403,6 +411,9 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
     const int v = j * step_;
     for (int first = 0; first < columns_; first += kLanes) {
       const int lanes_used = std::min(kLanes, columns_ - first);
+      // Groups wholly in the band's columns are skipped; its lanes in others are not written.
+      if ((first + lanes_used - 1) * step_ < band_px_) continue;
+      if (first * step_ > width_ - 1 - band_px_) break;
       // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
       //    spoils fewer than half a window's pairs, but on a kink of the surface (a corner, an
       //    object's edge) biased by the window's size.
@@ -410,7 +421,9 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
       pair_network.medians(rows.data(), counts, robust);
       if (local_reach == 0) {
         for (int l = 0; l < lanes_used; ++l) {
-          if (counts[l] >= needed) cells_[linear(first + l, j)] = robust[l];
+          if (counts[l] >= needed && !inBand(first + l, j)) {
+            cells_[linear(first + l, j)] = robust[l];
+          }
         }
         continue;
       }
@@ -446,7 +459,8 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
         localPairsOfRow(one_side, side);
       }
       for (int l = 0; l < lanes_used; ++l) {
-        if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
+        // needed >= 1: min_valid > 0
+        if (counts[l] < needed || inBand(first + l, j)) continue;
         float surface = robust[l];
         if (local[l].inliers >= kMinLocalPairs) {
           surface = local[l].mean;
@@ -460,7 +474,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
   });
 }
 
-void MeasuredSurface::extendByOneNode() {
+void MeasuredSurface::extendByOneNode(bool band_only) {
   // A node without a surface next to ones that have (the range limit, the edge of a hole, the
   // image's border): the mean of the linear extrapolations along its row and column from the two
   // nodes on each side that have, exact on a plane. Without it the pixels between the last
@@ -471,7 +485,7 @@ void MeasuredSurface::extendByOneNode() {
   std::vector<float> extended = cells_;
   forEachRow(rows_, [&](int j) {
     for (int i = 0; i < columns_; ++i) {
-      if (!std::isnan(cellAt(i, j))) continue;
+      if (!std::isnan(cellAt(i, j)) || (band_only && !inBand(i, j))) continue;
       double sum = 0;
       int count = 0;
       for (const auto& [di, dj] : kDirections) {

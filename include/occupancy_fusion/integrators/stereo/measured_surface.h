@@ -63,6 +63,16 @@ struct MeasuredSurfaceConfig {
   // changes alike; 0.25 px is about four times the noise of one grid surface at 0.3 px of pixel
   // noise. 0: never.
   double step_px = 0.25;
+  // Grid points nearer to the image's border than sample_step_px take the surface extrapolated
+  // from the two grid points inside them (as next to the range limit) instead of their own
+  // median. Their window keeps only the pairs whose pixels both lie inside the image, the one
+  // line of samples through the grid point (4 of 25 values), so a patch at the border alone
+  // decided it; and they are read by every voxel whose centre lies just outside the image (the
+  // reach of depthAt). New space entering the image at a border (sideways motion) got the
+  // patch's phantom (docs/disparity_method.md, "A second check outside the matrix"). On a plane
+  // the extrapolation is exact. Wider bands (8 and 12 px) rejected more of those phantoms but
+  // cost turning motions coverage and false-occupied voxels (measured there).
+  bool border_from_interior = true;
   // The vector instructions of the medians and the small windows' means: the same surface either
   // way; kBaseline runs plain x86-64's on any processor (for tests).
   MedianNetwork::Instructions instructions = MedianNetwork::Instructions::kWidest;
@@ -122,12 +132,18 @@ class MeasuredSurface {
                                  const SurfaceGridScale& scale);
   void measureNodes(const DisparityImageView& disparity, const SampleLattice& lattice,
                     const MeasuredSurfaceConfig& config);
-  void extendByOneNode();
+  // band_only: only the grid points of the border's band (border_from_interior).
+  void extendByOneNode(bool band_only = false);
+  bool inBand(int i, int j) const {  // grid point (i, j) lies in the border's band (never: 0 px)
+    const int u = i * step_, v = j * step_;
+    return u < band_px_ || u > width_ - 1 - band_px_ || v < band_px_ || v > height_ - 1 - band_px_;
+  }
   void findSteps(double step_px);
 
   Eigen::Isometry3d T_camera_map_ = Eigen::Isometry3d::Identity();
   double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0, focal_baseline_ = 0;
   int width_ = 0, height_ = 0, step_ = 1, columns_ = 0, rows_ = 0;
+  int band_px_ = 0;  // px from the image's border whose grid points are extrapolated (0: none)
   std::vector<float> cells_;         // row-major, columns_ x rows_
   std::vector<std::uint8_t> steps_;  // per cell (corners (i, j) to (i + 1, j + 1)): has a step
 };
