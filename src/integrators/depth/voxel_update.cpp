@@ -69,18 +69,34 @@ inline float PyramidDepthIntegrator::projectedLogOdds(const DepthFrame& frame,
   return pyramidLogOdds(frame, u, v, distance);
 }
 
-inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
-    const DepthFrame& frame, int level, double pixel_u, double pixel_v, double distance) const {
+inline PyramidDepthIntegrator::LayerPosition PyramidDepthIntegrator::layerPosition(
+    const DepthFrame& frame, int level, double pixel_u, double pixel_v) {
   // Eq. 14 with pixel centres at integer coordinates: cell U of layer i is centred on pixel
   // U 2^i + (2^i - 1) / 2, so u maps to (u + 0.5) / 2^i - 0.5 (>= -0.5 inside the image).
-  const DistancePyramid& pyramid = frame.pyramid;
-  const double scale = pyramid.scale(level);
+  const double scale = frame.pyramid.scale(level);
   const double u = (pixel_u + 0.5) * scale - 0.5;
   const double v = (pixel_v + 0.5) * scale - 0.5;
-  const int u0 = floorToInt(u);
-  const int v0 = floorToInt(v);
-  const double fu = u - u0;  // <u> of Eq. 16
-  const double fv = v - v0;
+  LayerPosition position;
+  position.level = level;
+  position.u0 = floorToInt(u);
+  position.v0 = floorToInt(v);
+  position.fu = u - position.u0;  // <u> of Eq. 16
+  position.fv = v - position.v0;
+  return position;
+}
+
+inline bool PyramidDepthIntegrator::layerMayInform(const DepthFrame& frame,
+                                                   const LayerPosition& position, double distance) {
+  // reachOfSquare bounds the four cells gatherCells weighs at this position.
+  return distance <= frame.pyramid.reachOfSquare(position.level, position.u0, position.v0);
+}
+
+inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
+    const DepthFrame& frame, const LayerPosition& position, double distance) const {
+  const DistancePyramid& pyramid = frame.pyramid;
+  const int level = position.level;
+  const int u0 = position.u0, v0 = position.v0;
+  const double fu = position.fu, fv = position.fv;
   const int width = pyramid.width(level);
   const int height = pyramid.height(level);
   const float* cells = pyramid.cells(level);
@@ -112,17 +128,6 @@ inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
   return result;
 }
 
-inline bool PyramidDepthIntegrator::layerMayInform(const DepthFrame& frame, int level,
-                                                   double pixel_u, double pixel_v,
-                                                   double distance) const {
-  // gatherCells' cell position (Eq. 14): reachOfSquare bounds the four cells it weighs.
-  const DistancePyramid& pyramid = frame.pyramid;
-  const double scale = pyramid.scale(level);
-  const int u0 = floorToInt((pixel_u + 0.5) * scale - 0.5);
-  const int v0 = floorToInt((pixel_v + 0.5) * scale - 0.5);
-  return distance <= pyramid.reachOfSquare(level, u0, v0);
-}
-
 inline float PyramidDepthIntegrator::bilinearLogOdds(const LayerCells& cells,
                                                      double distance) const {
   double weighted = 0.0;
@@ -140,19 +145,22 @@ inline float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, dou
   const int level = bracketingLevel(pyramid, distance);
   // Beyond t_0, or nearer than the last layer's t: one layer alone.
   if (level < 0 || level + 1 >= pyramid.levels()) {
-    if (!layerMayInform(frame, std::max(level, 0), u, v, distance)) return kNaN;
-    const LayerCells only = gatherCells(frame, std::max(level, 0), u, v, distance);
+    const LayerPosition position = layerPosition(frame, std::max(level, 0), u, v);
+    if (!layerMayInform(frame, position, distance)) return kNaN;
+    const LayerCells only = gatherCells(frame, position, distance);
     if (!only.valid() || !only.informs) return kNaN;
     if (farInFront(distance, only.nearest)) return model_.farInFrontLogOdds();
     return bilinearLogOdds(only, distance);
   }
   // Behind every surface both layers see (a third of the voxels at 0.02-0.05 m): no gathers.
-  if (!layerMayInform(frame, level, u, v, distance) &&
-      !layerMayInform(frame, level + 1, u, v, distance)) {
+  const LayerPosition fine_position = layerPosition(frame, level, u, v);
+  const LayerPosition coarse_position = layerPosition(frame, level + 1, u, v);
+  if (!layerMayInform(frame, fine_position, distance) &&
+      !layerMayInform(frame, coarse_position, distance)) {
     return kNaN;
   }
-  const LayerCells fine = gatherCells(frame, level, u, v, distance);
-  const LayerCells coarse = gatherCells(frame, level + 1, u, v, distance);
+  const LayerCells fine = gatherCells(frame, fine_position, distance);
+  const LayerCells coarse = gatherCells(frame, coarse_position, distance);
   if (!(fine.informs || coarse.informs)) return kNaN;
   if (farInFront(distance, std::min(fine.nearest, coarse.nearest))) {
     return model_.farInFrontLogOdds();

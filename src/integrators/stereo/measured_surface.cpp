@@ -363,6 +363,12 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
   };
   band_px_ = config.border_from_interior && hasInside(width_) && hasInside(height_) ? sample : 0;
   measureNodes(disparity, lattice, config);
+  // The band's grid points that measureNodes' groups computed beside others: extrapolated below.
+  for (int j = 0; j < rows_; ++j) {
+    for (int i = 0; i < columns_; ++i) {
+      if (inBand(i, j)) cells_[linear(i, j)] = kNoSurface;
+    }
+  }
   extendByOneNode();
   // Each pass reaches one grid point further out; corners take both directions.
   for (int pass = 0; pass * step_ < band_px_; ++pass) extendByOneNode(true);
@@ -411,7 +417,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
     const int v = j * step_;
     for (int first = 0; first < columns_; first += kLanes) {
       const int lanes_used = std::min(kLanes, columns_ - first);
-      // Groups wholly in the band's columns are skipped; its lanes in others are not written.
+      // Groups wholly in the band's columns are skipped (its lanes in others are cleared after).
       if ((first + lanes_used - 1) * step_ < band_px_) continue;
       if (first * step_ > width_ - 1 - band_px_) break;
       // 1. The wide windows' medians, kLanes nodes of the row at once: robust while a patch
@@ -421,9 +427,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
       pair_network.medians(rows.data(), counts, robust);
       if (local_reach == 0) {
         for (int l = 0; l < lanes_used; ++l) {
-          if (counts[l] >= needed && !inBand(first + l, j)) {
-            cells_[linear(first + l, j)] = robust[l];
-          }
+          if (counts[l] >= needed) cells_[linear(first + l, j)] = robust[l];
         }
         continue;
       }
@@ -459,8 +463,7 @@ void MeasuredSurface::measureNodes(const DisparityImageView& disparity,
         localPairsOfRow(one_side, side);
       }
       for (int l = 0; l < lanes_used; ++l) {
-        // needed >= 1: min_valid > 0
-        if (counts[l] < needed || inBand(first + l, j)) continue;
+        if (counts[l] < needed) continue;  // needed >= 1: min_valid > 0
         float surface = robust[l];
         if (local[l].inliers >= kMinLocalPairs) {
           surface = local[l].mean;

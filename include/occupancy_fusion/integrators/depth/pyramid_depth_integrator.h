@@ -79,13 +79,22 @@ class PyramidDepthIntegrator {
     float farthest = -std::numeric_limits<float>::infinity();  // of the valid cells
     bool valid() const { return weight_sum > 0.0; }
   };
+  // A pixel's place in one layer (Eq. 14): the first of the four cells Eq. 15 weighs and the
+  // fractions <u>, <v> of Eq. 16. Computed once per voxel and layer, for the reach test and the
+  // gather.
+  struct LayerPosition {
+    int level = 0;
+    int u0 = 0, v0 = 0;
+    double fu = 0.0, fv = 0.0;
+  };
+  static LayerPosition layerPosition(const DepthFrame& frame, int level, double u, double v);
   // The per-voxel functions return NaN for "no update" (no std::optional in the voxel loop).
-  LayerCells gatherCells(const DepthFrame& frame, int level, double u, double v,
-                         double distance) const;  // Eq. 14-15
+  LayerCells gatherCells(const DepthFrame& frame, const LayerPosition& position,
+                         double distance) const;  // Eq. 15
   // False where no cell of the layer that Eq. 15 can weigh for the voxel informs it: the
   // farthest of the four cells around its position, read from one table before the gather.
-  bool layerMayInform(const DepthFrame& frame, int level, double u, double v,
-                      double distance) const;
+  static bool layerMayInform(const DepthFrame& frame, const LayerPosition& position,
+                             double distance);
   float bilinearLogOdds(const LayerCells& cells, double distance) const;  // Eq. 16
   float pyramidLogOdds(const DepthFrame& frame, double u, double v,
                        double distance) const;  // Eq. 12, 17
