@@ -97,6 +97,7 @@ void convertFrameRays(const DisparityImageView& disparity, const StereoCamera& c
   rays->points.resize(slots);
   rays->range_sigmas.resize(slots);
   rays->ends.resize(slots);
+  rays->columns = columns;
   const FrameConversion frame{converter, T_map_camera.cast<float>(), T_map_camera.translation(),
                               resolution, needs_direction};
   std::vector<RowCounts> counts(rows);

@@ -19,6 +19,7 @@ struct FrameRays {
   std::vector<Eigen::Vector3f> points;  // map frame
   std::vector<float> range_sigmas;      // m, sigma_z scaled by range / z
   std::vector<RayTarget> ends;          // rayTargetOf each point
+  int columns = 0;                      // slots per image row (slot = row * columns + column)
   std::size_t points_count = 0;         // slots with a point
   std::size_t dropped_uncertain = 0;    // valid disparities dropped for sigma_z / z
 };

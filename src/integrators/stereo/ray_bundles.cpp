@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <utility>
 
 #include "occupancy_fusion/integrators/ray_traversal.h"
 #include "occupancy_fusion/map/spatial_key.h"
@@ -104,6 +106,49 @@ void appendLater(const Bundles& later, Bundles* bundles) {
 }
 
 }  // namespace
+
+namespace {
+
+// The bits of x at the even positions of the result (x < 2^16).
+std::uint32_t spreadBits(std::uint32_t x) {
+  x = (x | (x << 8)) & 0x00FF00FFu;
+  x = (x | (x << 4)) & 0x0F0F0F0Fu;
+  x = (x | (x << 2)) & 0x33333333u;
+  x = (x | (x << 1)) & 0x55555555u;
+  return x;
+}
+
+// The position of tile (u, v) along the Z-order curve.
+std::uint32_t zOrderOf(std::uint32_t u, std::uint32_t v) {
+  return spreadBits(u) | (spreadBits(v) << 1);
+}
+
+}  // namespace
+
+void orderByImageTiles(int columns, std::vector<BundledRay>* rays) {
+  if (columns <= 0 || rays->size() < 2) return;
+  std::uint32_t last_slot = 0;
+  for (const BundledRay& ray : *rays) last_slot = std::max(last_slot, ray.farthest);
+  const auto tile_columns = static_cast<std::uint32_t>((columns + kRayTilePx - 1) / kRayTilePx);
+  const std::uint32_t tile_rows = last_slot / static_cast<std::uint32_t>(columns) / kRayTilePx + 1;
+  // The count table has a slot per Z-order position up to the last tile's: 4 MB for an image of
+  // 8192 px a side. Larger images keep their order.
+  if (std::max(tile_columns, tile_rows) > (1u << 10)) return;
+  auto tileOf = [&](const BundledRay& ray) {
+    const std::uint32_t row = ray.farthest / static_cast<std::uint32_t>(columns);
+    const std::uint32_t column = ray.farthest - row * static_cast<std::uint32_t>(columns);
+    return zOrderOf(column / kRayTilePx, row / kRayTilePx);
+  };
+  // A counting sort, stable: one pass to count each tile's rays, one to place them.
+  std::vector<std::uint32_t> first_of_tile(zOrderOf(tile_columns - 1, tile_rows - 1) + 2, 0);
+  for (const BundledRay& ray : *rays) ++first_of_tile[tileOf(ray) + 1];
+  for (std::size_t tile = 1; tile < first_of_tile.size(); ++tile) {
+    first_of_tile[tile] += first_of_tile[tile - 1];
+  }
+  std::vector<BundledRay> ordered(rays->size());
+  for (const BundledRay& ray : *rays) ordered[first_of_tile[tileOf(ray)]++] = ray;
+  *rays = std::move(ordered);
+}
 
 std::vector<BundledRay> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
                                              bool visibility_mode, std::size_t* skipped) {

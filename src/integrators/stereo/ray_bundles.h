@@ -101,4 +101,14 @@ struct BundledRay {
 std::vector<BundledRay> bundleRaysByEndVoxel(const std::vector<RayTarget>& ends,
                                              bool visibility_mode, std::size_t* skipped);
 
+// The rays of an image's points (slot = row * columns + column, as FrameRays lays them out)
+// reordered tile by tile: the rays whose farthest point lies in one kRayTilePx x kRayTilePx tile
+// together, in their order, and the tiles along a Z-order curve. Rays that follow each other
+// then cross nearly the same voxels, from both sides: the walks' tables of the frame's voxels
+// stay in cache, and each thread's contiguous share of the rays is a compact part of the image
+// (row by row, a ray's neighbour in the row above came a whole image row earlier). The walks
+// reduce by maximum, so the order changes no update.
+constexpr int kRayTilePx = 8;
+void orderByImageTiles(int columns, std::vector<BundledRay>* rays);
+
 }  // namespace occupancy_fusion

@@ -750,13 +750,13 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   if (range_sigmas.size() != points_in_map.size()) {
     throw std::invalid_argument("range_sigmas must have one entry per point");
   }
-  return computeUpdates(points_in_map, range_sigmas, nullptr, points_in_map.size(), sensor_origin,
-                        map, updates, surface);
+  return computeUpdates(points_in_map, range_sigmas, nullptr, 0, points_in_map.size(),
+                        sensor_origin, map, updates, surface);
 }
 
 StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
-    const std::vector<RayTarget>* given_ends, std::size_t point_count,
+    const std::vector<RayTarget>* given_ends, int ray_columns, std::size_t point_count,
     const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
     std::vector<StereoVoxelUpdate>* updates, const MeasuredSurface* surface,
     VoxelMap* write_to) const {
@@ -801,6 +801,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   if (config_.bundle_rays) {
     if (given_ends != nullptr) {
       bundles = bundleRaysByEndVoxel(*given_ends, visibility_mode, &skipped);
+      orderByImageTiles(ray_columns, &bundles);
     } else {
       const std::vector<RayTarget> ends =
           rayTargetsOf(points_in_map, range_sigmas, sensor_origin, resolution, visibility_mode);
@@ -910,7 +911,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(
   if (range_sigmas.size() != points_in_map.size()) {
     throw std::invalid_argument("range_sigmas must have one entry per point");
   }
-  StereoIntegrationStats stats = integrateRays(points_in_map, range_sigmas, nullptr,
+  StereoIntegrationStats stats = integrateRays(points_in_map, range_sigmas, nullptr, 0,
                                                points_in_map.size(), sensor_origin, map, surface);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
@@ -918,11 +919,11 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(
 
 StereoIntegrationStats VisibilityStereoIntegrator::integrateRays(
     const std::vector<Eigen::Vector3f>& points_in_map, const std::vector<float>& range_sigmas,
-    const std::vector<RayTarget>* ends, std::size_t point_count,
+    const std::vector<RayTarget>* ends, int ray_columns, std::size_t point_count,
     const Eigen::Vector3d& sensor_origin, VoxelMap* map, const MeasuredSurface* surface) const {
   std::vector<StereoVoxelUpdate> unused;
-  return computeUpdates(points_in_map, range_sigmas, ends, point_count, sensor_origin, *map,
-                        &unused, surface, map);
+  return computeUpdates(points_in_map, range_sigmas, ends, ray_columns, point_count, sensor_origin,
+                        *map, &unused, surface, map);
 }
 
 void VisibilityStereoIntegrator::disparityToMapPoints(const DisparityImageView& disparity,
@@ -996,7 +997,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
         [&] { surface = measuredSurface(disparity, camera, T_map_camera, map->resolution()); });
   }
   StereoIntegrationStats stats =
-      integrateRays(rays.points, rays.range_sigmas, &rays.ends, rays.points_count,
+      integrateRays(rays.points, rays.range_sigmas, &rays.ends, rays.columns, rays.points_count,
                     T_map_camera.translation(), map, &surface);
   stats.dropped_uncertain = rays.dropped_uncertain;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

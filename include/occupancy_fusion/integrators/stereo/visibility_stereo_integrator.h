@@ -138,12 +138,15 @@ class VisibilityStereoIntegrator {
 
  private:
   // computeUpdates() over slots of points with their end voxels given (one per slot; a slot
-  // without a point is passed over), or computed here where `ends` is null. With write_to (the
+  // without a point is passed over), or computed here where `ends` is null. ray_columns: the
+  // slots per image row where the slots are an image's pixels (the rays are then walked tile by
+  // tile, orderByImageTiles), 0 where they are not. With write_to (the
   // map read, after the rays are cast) the updates are written to it straight from the threads'
   // tables, block by block, and `updates` stays empty: integrate() without its timing.
   StereoIntegrationStats computeUpdates(const std::vector<Eigen::Vector3f>& points_in_map,
                                         const std::vector<float>& range_sigmas,
-                                        const std::vector<RayTarget>* ends, std::size_t point_count,
+                                        const std::vector<RayTarget>* ends, int ray_columns,
+                                        std::size_t point_count,
                                         const Eigen::Vector3d& sensor_origin, const VoxelMap& map,
                                         std::vector<StereoVoxelUpdate>* updates,
                                         const MeasuredSurface* surface,
@@ -151,7 +154,8 @@ class VisibilityStereoIntegrator {
   // That computeUpdates(), writing the map.
   StereoIntegrationStats integrateRays(const std::vector<Eigen::Vector3f>& points_in_map,
                                        const std::vector<float>& range_sigmas,
-                                       const std::vector<RayTarget>* ends, std::size_t point_count,
+                                       const std::vector<RayTarget>* ends, int ray_columns,
+                                       std::size_t point_count,
                                        const Eigen::Vector3d& sensor_origin, VoxelMap* map,
                                        const MeasuredSurface* surface) const;
 
