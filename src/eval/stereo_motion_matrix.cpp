@@ -29,7 +29,9 @@ constexpr MotionKind kMotionKinds[] = {{"forward", StereoMotion::kForward, ""},
                                        {"aisle_curve", StereoMotion::kAisleCurve, ""},
                                        {"aisle_diagonal", StereoMotion::kAisleDiagonal, ""},
                                        {"aisle_fast", StereoMotion::kAisleFast, ""},
-                                       {"aisle_backward", StereoMotion::kAisleBackward, ""}};
+                                       {"aisle_backward", StereoMotion::kAisleBackward, ""},
+                                       {"office_loop", StereoMotion::kOfficeLoop, ""},
+                                       {"office_zigzag", StereoMotion::kOfficeZigzag, ""}};
 
 const MotionKind& kindOf(StereoMotion motion) {
   for (const MotionKind& kind : kMotionKinds) {
@@ -82,10 +84,16 @@ std::vector<StereoMotionCase> stereoAisleMotions() {
           motionAt(StereoMotion::kAisleFast, 0.30), motionAt(StereoMotion::kAisleBackward, 0.10)};
 }
 
+std::vector<StereoMotionCase> stereoOfficeMotions() {
+  return {motionAt(StereoMotion::kOfficeLoop, 0.10), motionAt(StereoMotion::kOfficeLoop, 0.25),
+          motionAt(StereoMotion::kOfficeZigzag, 0.10), motionAt(StereoMotion::kOfficeZigzag, 0.20)};
+}
+
 StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
   std::string known;
   std::vector<StereoMotionCase> motions = stereoMatrixMotions();
   for (const StereoMotionCase& aisle : stereoAisleMotions()) motions.push_back(aisle);
+  for (const StereoMotionCase& office : stereoOfficeMotions()) motions.push_back(office);
   for (const StereoMotionCase& motion : motions) {
     if (motion.name == name) return motion;
     known += (known.empty() ? "" : ", ") + motion.name;
@@ -107,9 +115,27 @@ bool StereoMotionSetup::isAisle() const {
          motion.motion == StereoMotion::kAisleFast || motion.motion == StereoMotion::kAisleBackward;
 }
 
+bool StereoMotionSetup::isOffice() const {
+  return motion.motion == StereoMotion::kOfficeLoop || motion.motion == StereoMotion::kOfficeZigzag;
+}
+
 StereoMotionSetup stereoSetupFor(const StereoMotionCase& motion) {
   StereoMotionSetup setup;
   setup.motion = motion;
+  if (setup.isOffice()) {
+    setup.width = 848;
+    setup.height = 480;
+    setup.focal_px = 425.0;
+    setup.baseline = 0.095;
+    setup.max_range = 8.0;
+    setup.noise.sigma_px = 0.5;
+    setup.noise.patch_probability = 0.2;
+    setup.noise.patch_size_px = 20;
+    setup.noise.patch_offset_px = 2.5;
+    setup.noise.patch_persistence_frames = 4;
+    setup.noise.seed = 23;
+    return setup;
+  }
   if (!setup.isAisle()) return setup;
   setup.width = 640;
   setup.height = 480;
@@ -142,6 +168,7 @@ StereoCamera StereoMotionSetup::stereo() const {
 
 sim::Scene StereoMotionSetup::scene() const {
   if (isAisle()) return sim::makeAisleScene();
+  if (isOffice()) return sim::makeOfficeScene();
   return motion.motion == StereoMotion::kTurn ? sim::makeRoomScene() : sim::makeCorridorScene();
 }
 
@@ -173,6 +200,25 @@ Eigen::Isometry3d aislePose(const StereoMotionCase& motion, int k) {
   return Eigen::Translation3d(x, y, 1.0) *
          Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()) *
          Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY());
+}
+
+// The office motions' body poses at 1.1 m height, pitched 0.15 rad down.
+Eigen::Isometry3d officePose(const StereoMotionCase& motion, int k) {
+  double x = 0.0, y = 0.0, yaw = 0.0;
+  if (motion.motion == StereoMotion::kOfficeLoop) {
+    // Counter-clockwise from the ellipse's lowest point, the step along its mean radius.
+    constexpr double kA = 3.2, kB = 2.2;
+    const double theta = -0.5 * M_PI + motion.step * k / (0.5 * (kA + kB));
+    x = 0.3 + kA * std::cos(theta);
+    y = 0.1 + kB * std::sin(theta);
+    yaw = std::atan2(kB * std::cos(theta), -kA * std::sin(theta));
+  } else {  // kOfficeZigzag
+    x = -4.0 + motion.step * k;
+    y = 0.15;
+    yaw = 30.0 * M_PI / 180.0 * std::sin(2.0 * M_PI * k / 16.0);
+  }
+  return Eigen::Translation3d(x, y, 1.1) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitY());
 }
 
 }  // namespace
@@ -210,6 +256,10 @@ std::vector<Eigen::Isometry3d> StereoMotionSetup::poses() const {
       case StereoMotion::kAisleFast:
       case StereoMotion::kAisleBackward:
         pose = aislePose(motion, k) * optical;
+        break;
+      case StereoMotion::kOfficeLoop:
+      case StereoMotion::kOfficeZigzag:
+        pose = officePose(motion, k) * optical;
         break;
     }
     poses.push_back(pose);

@@ -97,5 +97,55 @@ Scene makeRoomScene() {
   return scene;
 }
 
+namespace {
+
+// A desk's top (x0, y0)-(x1, y1), 3 cm thick at 0.72-0.75 m, on four 4 cm legs at its corners.
+void addDesk(Scene* scene, double x0, double y0, double x1, double y1) {
+  constexpr double kTop = 0.72, kLeg = 0.04;
+  scene->add(aabb(x0, y0, kTop, x1, y1, kTop + 0.03));
+  for (double x : {x0, x1 - kLeg}) {
+    for (double y : {y0, y1 - kLeg}) scene->add(aabb(x, y, 0.0, x + kLeg, y + kLeg, kTop));
+  }
+}
+
+// A chair at (x, y) (its seat's corner), 0.45 m square: a 4 cm seat at 0.45 m on 3 cm legs and
+// a 4 cm back up to 0.95 m along its +y edge.
+void addChair(Scene* scene, double x, double y) {
+  constexpr double kSide = 0.45, kSeat = 0.45, kLeg = 0.03;
+  scene->add(aabb(x, y, kSeat, x + kSide, y + kSide, kSeat + 0.04))
+      .add(aabb(x, y + kSide - 0.04, kSeat + 0.04, x + kSide, y + kSide, 0.95));
+  for (double lx : {x, x + kSide - kLeg}) {
+    for (double ly : {y, y + kSide - kLeg}) {
+      scene->add(aabb(lx, ly, 0.0, lx + kLeg, ly + kLeg, kSeat));
+    }
+  }
+}
+
+}  // namespace
+
+Scene makeOfficeScene() {
+  Scene scene;
+  scene.add(floorAtZero())
+      .add(aabb(-5.0, -4.0, 0.0, 5.0, -3.9, 2.6))  // right wall (-y)
+      .add(aabb(-5.0, 3.9, 0.0, 5.0, 4.0, 2.6))    // left wall (+y)
+      .add(aabb(-5.0, -3.9, 0.0, -4.9, 3.9, 2.6))  // back wall (-x)
+      .add(aabb(4.9, -3.9, 0.0, 5.0, 3.9, 2.6));   // front wall (+x)
+  addDesk(&scene, -1.6, -1.4, 0.0, -0.6);
+  addDesk(&scene, 0.6, 0.8, 2.2, 1.6);
+  addChair(&scene, -1.0, -0.55);
+  addChair(&scene, 1.2, 0.55);
+  scene
+      .add(Cylinder::upright(2.8, -1.8, 0.70, 0.5, 0.03))  // round table's top
+      .add(Cylinder::upright(2.8, -1.8, 0.0, 0.04, 0.70))  // and its pole
+      .add(aabb(-4.9, 1.5, 0.0, -4.5, 3.5, 2.0))           // bookshelf
+      .add(aabb(3.5, 2.5, 0.0, 4.9, 3.9, 0.45))            // couch
+      .add(aabb(4.7, 2.5, 0.45, 4.9, 3.9, 0.9))            // its back
+      .add(Cylinder::upright(-3.5, -3.2, 0.0, 0.02, 1.6))  // floor lamp
+      .add(Sphere{Eigen::Vector3d(-3.5, -3.2, 1.7), 0.15})
+      .add(Cylinder::upright(0.5, -3.0, 0.0, 0.2, 2.6))  // column
+      .add(aabb(-2.5, 3.5, 0.0, -1.5, 3.9, 1.0));        // cabinet
+  return scene;
+}
+
 }  // namespace sim
 }  // namespace occupancy_fusion

@@ -29,6 +29,9 @@ enum class StereoMotion {
   kAisleDiagonal,  // across the aisle at 26.6 deg, looking 15 deg to the left; m per frame
   kAisleFast,      // straight along the aisle; m per frame
   kAisleBackward,  // backing out of the aisle, looking 10 deg to the right of ahead; m per frame
+  // A third check: the office (sim::makeOfficeScene), a third camera (stereoSetupFor).
+  kOfficeLoop,    // around the furniture on an ellipse, looking along the path; m per frame
+  kOfficeZigzag,  // across the office, the heading swinging +-30 deg every 16 frames; m per frame
 };
 
 struct StereoMotionCase {
@@ -42,6 +45,8 @@ std::vector<StereoMotionCase> stereoMatrixMotions();
 // The check outside the matrix: aisle_curve_0.15, aisle_diagonal_0.09, aisle_fast_0.30,
 // aisle_backward_0.10, 0.05 to 0.3 m per frame.
 std::vector<StereoMotionCase> stereoAisleMotions();
+// The third check: office_loop_0.10, office_loop_0.25, office_zigzag_0.10, office_zigzag_0.20.
+std::vector<StereoMotionCase> stereoOfficeMotions();
 StereoMotionCase stereoMotionCaseFromName(const std::string& name);  // throws on an unknown name
 
 struct StereoMotionSetup {
@@ -54,15 +59,18 @@ struct StereoMotionSetup {
   sim::DisparityNoise noise = StereoCorridorSetup().noise();
 
   bool isAisle() const;
+  bool isOffice() const;
   sim::PinholeCamera camera() const;
   StereoCamera stereo() const;
-  sim::Scene scene() const;                      // corridor, or the room for kTurn
+  sim::Scene scene() const;  // corridor, the room for kTurn, the aisle or the office
   std::vector<Eigen::Isometry3d> poses() const;  // the left optical frame per frame
 };
 
 // The set-up of a motion: the matrix's camera (above), or for the aisle motions another one:
 // 640 x 480, f = 420 px, b = 0.09 m, rendered up to 10 m, white noise 0.4 px and patches of
-// +-2 px in 25 % of 16 px cells, kept for 6 frames (seed 11).
+// +-2 px in 25 % of 16 px cells, kept for 6 frames (seed 11); for the office motions a third:
+// 848 x 480, f = 425 px, b = 0.095 m (a depth camera's stereo pair), rendered up to 8 m, white
+// noise 0.5 px and patches of +-2.5 px in 20 % of 20 px cells, kept for 4 frames (seed 23).
 StereoMotionSetup stereoSetupFor(const StereoMotionCase& motion);
 
 // The rendered disparity images of a set-up (independent of the mapper).

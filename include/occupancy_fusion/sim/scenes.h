@@ -54,5 +54,15 @@ Scene makeRoomScene();
 // 5 cm thick, floating at 0.7 m) at x in [3, 3.8], y in [-1.2, -0.6].
 Scene makeAisleScene();
 
+// An office for a third check of the stereo evaluation (other scene, camera and motions again):
+// 10 x 8 x 2.6 m (x in [-5, 5], y in [-4, 4]), floor (half-space z <= 0), 0.1 m thick walls
+// along the inside of that outline, no ceiling; furniture of thin parts: two desks (tops 3 cm
+// thick at 0.72-0.75 m on 4 cm legs), a round table (r = 0.5 m top on a 4 cm pole) at
+// (2.8, -1.8), two chairs (4 cm seats at 0.45 m, backs up to 0.95 m, 3 cm legs), a bookshelf, a
+// couch, a floor lamp (a 2 cm pole with a 0.15 m sphere at 1.7 m), a column (r = 0.2 m) and a
+// cabinet. The ellipse about (0.3, 0.1) with half-axes 3.2 and 2.2 m, and the line y = 0.15 from
+// x = -4 to 4, are free at 1.1 m height.
+Scene makeOfficeScene();
+
 }  // namespace sim
 }  // namespace occupancy_fusion

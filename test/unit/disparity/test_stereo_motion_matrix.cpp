@@ -137,5 +137,39 @@ TEST(StereoMotionMatrixTest, AisleMotionsHaveTheirOwnCameraAndScene) {
   EXPECT_EQ(stereoSetupFor(stereoMotionCaseFromName("forward_0.10")).width, 320);
 }
 
+TEST(StereoMotionMatrixTest, OfficeMotionsStayInTheOfficesFreeSpace) {
+  EXPECT_EQ(stereoOfficeMotions().size(), 4u);
+  for (const char* name : {"office_loop_0.25", "office_zigzag_0.20"}) {
+    SCOPED_TRACE(name);
+    const StereoMotionSetup office = stereoSetupFor(stereoMotionCaseFromName(name));
+    EXPECT_EQ(office.width, 848);
+    EXPECT_DOUBLE_EQ(office.baseline, 0.095);
+    const sim::Scene scene = office.scene();
+    const auto poses = office.poses();
+    ASSERT_EQ(poses.size(), 40u);
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      // Each step is the motion's, and no surface lies within 0.2 m of the camera: rays in the
+      // six axis directions leave it freely.
+      if (k > 0) {
+        const double step = office.motion.step;
+        const double moved = (poses[k].translation() - poses[k - 1].translation()).norm();
+        EXPECT_NEAR(moved, step, 0.25 * step) << "frame " << k;
+      }
+      EXPECT_NEAR(poses[k].translation().z(), 1.1, 1e-9);
+      for (int axis = 0; axis < 3; ++axis) {
+        for (double sign : {-1.0, 1.0}) {
+          const Eigen::Vector3d direction = sign * Eigen::Vector3d::Unit(axis);
+          EXPECT_FALSE(scene.castRay(poses[k].translation(), direction, 0.2).has_value())
+              << "frame " << k << " axis " << axis;
+        }
+      }
+    }
+  }
+  // The zigzag's heading swings through +-30 deg: after 4 frames it looks 30 deg to the left.
+  const StereoMotionSetup zigzag = stereoSetupFor(stereoMotionCaseFromName("office_zigzag_0.10"));
+  const Eigen::Vector3d axis = zigzag.poses()[4].linear().col(2);  // the optical axis
+  EXPECT_NEAR(std::atan2(axis.y(), axis.x()), 30.0 * M_PI / 180.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace occupancy_fusion
