@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
@@ -119,35 +120,44 @@ bool StereoMotionSetup::isOffice() const {
   return motion.motion == StereoMotion::kOfficeLoop || motion.motion == StereoMotion::kOfficeZigzag;
 }
 
+namespace {
+
+// The camera and matcher errors of a check outside the matrix (the matrix keeps
+// StereoMotionSetup's defaults); the errors' other fields stay the matrix's.
+struct CheckCamera {
+  int width, height;
+  double focal_px, baseline, max_range;  // px, m, m
+  double sigma_px, patch_probability;
+  int patch_size_px;
+  double patch_offset_px;
+  int patch_persistence_frames;
+  std::uint64_t seed;
+};
+constexpr CheckCamera kAisleCamera{640, 480, 420.0, 0.09, 10.0, 0.4, 0.25, 16, 2.0, 6, 11};
+constexpr CheckCamera kOfficeCamera{848, 480, 425.0, 0.095, 8.0, 0.5, 0.2, 20, 2.5, 4, 23};
+
+void useCamera(const CheckCamera& camera, StereoMotionSetup* setup) {
+  setup->width = camera.width;
+  setup->height = camera.height;
+  setup->focal_px = camera.focal_px;
+  setup->baseline = camera.baseline;
+  setup->max_range = camera.max_range;
+  sim::DisparityNoise& noise = setup->noise;
+  noise.sigma_px = camera.sigma_px;
+  noise.patch_probability = camera.patch_probability;
+  noise.patch_size_px = camera.patch_size_px;
+  noise.patch_offset_px = camera.patch_offset_px;
+  noise.patch_persistence_frames = camera.patch_persistence_frames;
+  noise.seed = camera.seed;
+}
+
+}  // namespace
+
 StereoMotionSetup stereoSetupFor(const StereoMotionCase& motion) {
   StereoMotionSetup setup;
   setup.motion = motion;
-  if (setup.isOffice()) {
-    setup.width = 848;
-    setup.height = 480;
-    setup.focal_px = 425.0;
-    setup.baseline = 0.095;
-    setup.max_range = 8.0;
-    setup.noise.sigma_px = 0.5;
-    setup.noise.patch_probability = 0.2;
-    setup.noise.patch_size_px = 20;
-    setup.noise.patch_offset_px = 2.5;
-    setup.noise.patch_persistence_frames = 4;
-    setup.noise.seed = 23;
-    return setup;
-  }
-  if (!setup.isAisle()) return setup;
-  setup.width = 640;
-  setup.height = 480;
-  setup.focal_px = 420.0;
-  setup.baseline = 0.09;
-  setup.max_range = 10.0;
-  setup.noise.sigma_px = 0.4;
-  setup.noise.patch_probability = 0.25;
-  setup.noise.patch_size_px = 16;
-  setup.noise.patch_offset_px = 2.0;
-  setup.noise.patch_persistence_frames = 6;
-  setup.noise.seed = 11;
+  if (setup.isOffice()) useCamera(kOfficeCamera, &setup);
+  if (setup.isAisle()) useCamera(kAisleCamera, &setup);
   return setup;
 }
 

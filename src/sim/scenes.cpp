@@ -83,13 +83,26 @@ Scene makeAisleScene() {
   return scene;
 }
 
+namespace {
+
+// Walls 0.1 m thick along the inside of the outline x in [-half_x, half_x], y in [-half_y,
+// half_y], `height` high: right (-y), left (+y), back (-x), front (+x).
+void addWalls(Scene* scene, double half_x, double half_y, double height) {
+  constexpr double kThickness = 0.1;
+  const double inner_y = half_y - kThickness;
+  scene->add(aabb(-half_x, -half_y, 0.0, half_x, -inner_y, height))
+      .add(aabb(-half_x, inner_y, 0.0, half_x, half_y, height))
+      .add(aabb(-half_x, -inner_y, 0.0, -half_x + kThickness, inner_y, height))
+      .add(aabb(half_x - kThickness, -inner_y, 0.0, half_x, inner_y, height));
+}
+
+}  // namespace
+
 Scene makeRoomScene() {
   Scene scene;
-  scene.add(floorAtZero())
-      .add(aabb(-4.0, -3.0, 0.0, 4.0, -2.9, 2.5))  // right wall (-y)
-      .add(aabb(-4.0, 2.9, 0.0, 4.0, 3.0, 2.5))    // left wall (+y)
-      .add(aabb(-4.0, -2.9, 0.0, -3.9, 2.9, 2.5))  // back wall (-x)
-      .add(aabb(3.9, -2.9, 0.0, 4.0, 2.9, 2.5))    // front wall (+x)
+  scene.add(floorAtZero());
+  addWalls(&scene, 4.0, 3.0, 2.5);
+  scene
       .add(aabb(0.7, 0.55, 0.0, 2.3, 1.45, 0.75))  // table
       .add(Cylinder::upright(-2.0, -1.5, 0.0, 0.25, 1.2))
       .add(Sphere{Eigen::Vector3d(-1.5, 1.6, 0.4), 0.4})
@@ -125,11 +138,8 @@ void addChair(Scene* scene, double x, double y) {
 
 Scene makeOfficeScene() {
   Scene scene;
-  scene.add(floorAtZero())
-      .add(aabb(-5.0, -4.0, 0.0, 5.0, -3.9, 2.6))  // right wall (-y)
-      .add(aabb(-5.0, 3.9, 0.0, 5.0, 4.0, 2.6))    // left wall (+y)
-      .add(aabb(-5.0, -3.9, 0.0, -4.9, 3.9, 2.6))  // back wall (-x)
-      .add(aabb(4.9, -3.9, 0.0, 5.0, 3.9, 2.6));   // front wall (+x)
+  scene.add(floorAtZero());
+  addWalls(&scene, 5.0, 4.0, 2.6);
   addDesk(&scene, -1.6, -1.4, 0.0, -0.6);
   addDesk(&scene, 0.6, 0.8, 2.2, 1.6);
   addChair(&scene, -1.0, -0.55);
