@@ -348,8 +348,8 @@ const std::vector<Workload>& workloads() {
        "      [--seed K] vary the matcher's errors (0.3 px, 0.3 of 12 px cells, 1.5 px, 7);\n"
        "      --motions aisle_curve_0.15,aisle_diagonal_0.09,aisle_fast_0.30,aisle_backward_0.10:\n"
        "      the check outside the matrix (a warehouse aisle, a 640x480 camera, other motions);\n"
-       "      --motions office_loop_0.10,office_loop_0.25,office_zigzag_0.10,office_zigzag_0.20:\n"
-       "      a third (an office of thin furniture, an 848x480 camera, curved and swinging paths)",
+       "      --motions office_loop_0.10,office_loop_0.25,office_zigzag_0.10,office_zigzag_0.20,\n"
+       "      office_backward_0.10: a third (an office of thin furniture, an 848x480 camera)",
        {"part",
         "frames",
         "resolution",

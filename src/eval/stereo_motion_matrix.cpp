@@ -32,7 +32,8 @@ constexpr MotionKind kMotionKinds[] = {{"forward", StereoMotion::kForward, ""},
                                        {"aisle_fast", StereoMotion::kAisleFast, ""},
                                        {"aisle_backward", StereoMotion::kAisleBackward, ""},
                                        {"office_loop", StereoMotion::kOfficeLoop, ""},
-                                       {"office_zigzag", StereoMotion::kOfficeZigzag, ""}};
+                                       {"office_zigzag", StereoMotion::kOfficeZigzag, ""},
+                                       {"office_backward", StereoMotion::kOfficeBackward, ""}};
 
 const MotionKind& kindOf(StereoMotion motion) {
   for (const MotionKind& kind : kMotionKinds) {
@@ -87,7 +88,8 @@ std::vector<StereoMotionCase> stereoAisleMotions() {
 
 std::vector<StereoMotionCase> stereoOfficeMotions() {
   return {motionAt(StereoMotion::kOfficeLoop, 0.10), motionAt(StereoMotion::kOfficeLoop, 0.25),
-          motionAt(StereoMotion::kOfficeZigzag, 0.10), motionAt(StereoMotion::kOfficeZigzag, 0.20)};
+          motionAt(StereoMotion::kOfficeZigzag, 0.10), motionAt(StereoMotion::kOfficeZigzag, 0.20),
+          motionAt(StereoMotion::kOfficeBackward, 0.10)};
 }
 
 StereoMotionCase stereoMotionCaseFromName(const std::string& name) {
@@ -117,7 +119,9 @@ bool StereoMotionSetup::isAisle() const {
 }
 
 bool StereoMotionSetup::isOffice() const {
-  return motion.motion == StereoMotion::kOfficeLoop || motion.motion == StereoMotion::kOfficeZigzag;
+  return motion.motion == StereoMotion::kOfficeLoop ||
+         motion.motion == StereoMotion::kOfficeZigzag ||
+         motion.motion == StereoMotion::kOfficeBackward;
 }
 
 namespace {
@@ -222,8 +226,9 @@ Eigen::Isometry3d officePose(const StereoMotionCase& motion, int k) {
     x = 0.3 + kA * std::cos(theta);
     y = 0.1 + kB * std::sin(theta);
     yaw = std::atan2(kB * std::cos(theta), -kA * std::sin(theta));
-  } else {  // kOfficeZigzag
-    x = -4.0 + motion.step * k;
+  } else {  // kOfficeZigzag, kOfficeBackward: the same line and heading, either way along it
+    x = motion.motion == StereoMotion::kOfficeZigzag ? -4.0 + motion.step * k
+                                                     : 3.8 - motion.step * k;
     y = 0.15;
     yaw = 30.0 * M_PI / 180.0 * std::sin(2.0 * M_PI * k / 16.0);
   }
@@ -269,6 +274,7 @@ std::vector<Eigen::Isometry3d> StereoMotionSetup::poses() const {
         break;
       case StereoMotion::kOfficeLoop:
       case StereoMotion::kOfficeZigzag:
+      case StereoMotion::kOfficeBackward:
         pose = officePose(motion, k) * optical;
         break;
     }

@@ -30,8 +30,9 @@ enum class StereoMotion {
   kAisleFast,      // straight along the aisle; m per frame
   kAisleBackward,  // backing out of the aisle, looking 10 deg to the right of ahead; m per frame
   // A third check: the office (sim::makeOfficeScene), a third camera (stereoSetupFor).
-  kOfficeLoop,    // around the furniture on an ellipse, looking along the path; m per frame
-  kOfficeZigzag,  // across the office, the heading swinging +-30 deg every 16 frames; m per frame
+  kOfficeLoop,      // around the furniture on an ellipse, looking along the path; m per frame
+  kOfficeZigzag,    // across the office, the heading swinging +-30 deg every 16 frames; m per frame
+  kOfficeBackward,  // the zigzag's line backwards from x = 3.8, looking and swinging as it; m/frame
 };
 
 struct StereoMotionCase {
@@ -45,7 +46,8 @@ std::vector<StereoMotionCase> stereoMatrixMotions();
 // The check outside the matrix: aisle_curve_0.15, aisle_diagonal_0.09, aisle_fast_0.30,
 // aisle_backward_0.10, 0.05 to 0.3 m per frame.
 std::vector<StereoMotionCase> stereoAisleMotions();
-// The third check: office_loop_0.10, office_loop_0.25, office_zigzag_0.10, office_zigzag_0.20.
+// The third check: office_loop_0.10, office_loop_0.25, office_zigzag_0.10, office_zigzag_0.20,
+// office_backward_0.10.
 std::vector<StereoMotionCase> stereoOfficeMotions();
 StereoMotionCase stereoMotionCaseFromName(const std::string& name);  // throws on an unknown name
 

@@ -138,8 +138,8 @@ TEST(StereoMotionMatrixTest, AisleMotionsHaveTheirOwnCameraAndScene) {
 }
 
 TEST(StereoMotionMatrixTest, OfficeMotionsStayInTheOfficesFreeSpace) {
-  EXPECT_EQ(stereoOfficeMotions().size(), 4u);
-  for (const char* name : {"office_loop_0.25", "office_zigzag_0.20"}) {
+  EXPECT_EQ(stereoOfficeMotions().size(), 5u);
+  for (const char* name : {"office_loop_0.25", "office_zigzag_0.20", "office_backward_0.20"}) {
     SCOPED_TRACE(name);
     const StereoMotionSetup office = stereoSetupFor(stereoMotionCaseFromName(name));
     EXPECT_EQ(office.width, 848);
@@ -169,6 +169,11 @@ TEST(StereoMotionMatrixTest, OfficeMotionsStayInTheOfficesFreeSpace) {
   const StereoMotionSetup zigzag = stereoSetupFor(stereoMotionCaseFromName("office_zigzag_0.10"));
   const Eigen::Vector3d axis = zigzag.poses()[4].linear().col(2);  // the optical axis
   EXPECT_NEAR(std::atan2(axis.y(), axis.x()), 30.0 * M_PI / 180.0, 1e-9);
+  // Backwards along the same line: from x = 3.8 towards -x, looking the same way.
+  const StereoMotionSetup backward =
+      stereoSetupFor(stereoMotionCaseFromName("office_backward_0.10"));
+  EXPECT_NEAR(backward.poses()[10].translation().x(), 2.8, 1e-9);
+  EXPECT_TRUE(backward.poses()[4].linear().isApprox(zigzag.poses()[4].linear()));
 }
 
 }  // namespace
