@@ -105,10 +105,6 @@ void appendLater(const Bundles& later, Bundles* bundles) {
   bundles->skipped += later.skipped;
 }
 
-}  // namespace
-
-namespace {
-
 // The bits of x at the even positions of the result (x < 2^16).
 std::uint32_t spreadBits(std::uint32_t x) {
   x = (x | (x << 8)) & 0x00FF00FFu;
