@@ -364,9 +364,18 @@ MeasuredSurface::MeasuredSurface(const DisparityImageView& disparity, const Ster
   band_px_ = config.border_from_interior && hasInside(width_) && hasInside(height_) ? sample : 0;
   measureNodes(disparity, lattice, config);
   // The band's grid points that measureNodes' groups computed beside others: extrapolated below.
-  for (int j = 0; j < rows_; ++j) {
-    for (int i = 0; i < columns_; ++i) {
-      if (inBand(i, j)) cells_[linear(i, j)] = kNoSurface;
+  // The band is narrower than a grid step (band_px_ = sample <= step_), so it holds at most the
+  // first and the last row and column: only those are visited.
+  if (band_px_ > 0) {
+    for (int j : {0, rows_ - 1}) {
+      for (int i = 0; i < columns_; ++i) {
+        if (inBand(i, j)) cells_[linear(i, j)] = kNoSurface;
+      }
+    }
+    for (int j = 1; j + 1 < rows_; ++j) {
+      for (int i : {0, columns_ - 1}) {
+        if (inBand(i, j)) cells_[linear(i, j)] = kNoSurface;
+      }
     }
   }
   extendByOneNode();
