@@ -41,6 +41,7 @@ int runDisparity(const CommandLine& args);           // benchmark_disparity.cpp
 int runDisparityArtifacts(const CommandLine& args);  // benchmark_disparity_artifacts.cpp
 int runCheckpoint(const CommandLine& args);          // benchmark_checkpoint.cpp
 int runSpill(const CommandLine& args);               // benchmark_spill.cpp
+int runRobotBudget(const CommandLine& args);         // benchmark_robot_budget.cpp
 
 namespace {
 
@@ -399,6 +400,19 @@ const std::vector<Workload>& workloads() {
        {"length", "step", "resolution", "bound_mb", "spill_folder", "return", "width", "height",
         "csv", "save", "save_liboctomap", "laser", "layer_bound_mb"},
        runSpill},
+      {"robot-budget",
+       "[--seconds N] [--output DIR] [--launch_arg name:=value ...] [--script PATH]\n"
+       "      [--dry_run 1]\n"
+       "      the whole robot in the ROS graph (scripts/robot_budget.sh, with this build; needs\n"
+       "      ROS): depth 640x480 at 30 Hz, disparity at 15 Hz and two lasers at 40 Hz from a\n"
+       "      simulated recording at native rates into one manager, projected_map and markers\n"
+       "      subscribed; per sensor frames sent, integrated and dropped, latency from the stamp\n"
+       "      to the first projected_map that holds it (median, p99), the manager's CPU share;\n"
+       "      robot_budget.csv / .txt / .png in DIR (default output/robot_budget). Launch\n"
+       "      arguments: resolution, publish_rate, stereo_input, worker_threads, queue_size,\n"
+       "      stereo_method, disparity, depth_threads, disparity_threads, disparity_queue_size",
+       {"seconds", "output", "launch_arg", "script", "dry_run"},
+       runRobotBudget},
   };
   return table;
 }
