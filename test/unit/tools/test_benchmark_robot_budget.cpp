@@ -18,9 +18,10 @@ using test_support::RunResult;
 using test_support::runTool;
 namespace fs = std::filesystem;
 
-// <build>/devel/lib/occupancy_fusion/benchmark -> <build>
+// <build>/devel/lib/occupancy_fusion/benchmark -> <build>, links resolved as the running
+// executable's own path has them.
 fs::path buildFolderOfBenchmark() {
-  return fs::path(BENCHMARK_PATH).parent_path().parent_path().parent_path().parent_path();
+  return fs::canonical(BENCHMARK_PATH).parent_path().parent_path().parent_path().parent_path();
 }
 
 class RobotBudgetWorkload : public ::testing::Test {
