@@ -14,6 +14,39 @@ Box aabb(double x0, double y0, double z0, double x1, double y1, double z1) {
 
 Plane floorAtZero() { return Plane{Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()}; }
 
+// Walls 0.1 m thick along the inside of the outline x in [-half_x, half_x], y in [-half_y,
+// half_y], `height` high: right (-y), left (+y), back (-x), front (+x).
+void addWalls(Scene* scene, double half_x, double half_y, double height) {
+  constexpr double kThickness = 0.1;
+  const double inner_y = half_y - kThickness;
+  scene->add(aabb(-half_x, -half_y, 0.0, half_x, -inner_y, height))
+      .add(aabb(-half_x, inner_y, 0.0, half_x, half_y, height))
+      .add(aabb(-half_x, -inner_y, 0.0, -half_x + kThickness, inner_y, height))
+      .add(aabb(half_x - kThickness, -inner_y, 0.0, half_x, inner_y, height));
+}
+
+// A desk's top (x0, y0)-(x1, y1), 3 cm thick at 0.72-0.75 m, on four 4 cm legs at its corners.
+void addDesk(Scene* scene, double x0, double y0, double x1, double y1) {
+  constexpr double kTop = 0.72, kLeg = 0.04;
+  scene->add(aabb(x0, y0, kTop, x1, y1, kTop + 0.03));
+  for (double x : {x0, x1 - kLeg}) {
+    for (double y : {y0, y1 - kLeg}) scene->add(aabb(x, y, 0.0, x + kLeg, y + kLeg, kTop));
+  }
+}
+
+// A chair at (x, y) (its seat's corner), 0.45 m square: a 4 cm seat at 0.45 m on 3 cm legs and
+// a 4 cm back up to 0.95 m along its +y edge.
+void addChair(Scene* scene, double x, double y) {
+  constexpr double kSide = 0.45, kSeat = 0.45, kLeg = 0.03;
+  scene->add(aabb(x, y, kSeat, x + kSide, y + kSide, kSeat + 0.04))
+      .add(aabb(x, y + kSide - 0.04, kSeat + 0.04, x + kSide, y + kSide, 0.95));
+  for (double lx : {x, x + kSide - kLeg}) {
+    for (double ly : {y, y + kSide - kLeg}) {
+      scene->add(aabb(lx, ly, 0.0, lx + kLeg, ly + kLeg, kSeat));
+    }
+  }
+}
+
 }  // namespace
 
 Scene makeBoxScene() {
@@ -83,21 +116,6 @@ Scene makeAisleScene() {
   return scene;
 }
 
-namespace {
-
-// Walls 0.1 m thick along the inside of the outline x in [-half_x, half_x], y in [-half_y,
-// half_y], `height` high: right (-y), left (+y), back (-x), front (+x).
-void addWalls(Scene* scene, double half_x, double half_y, double height) {
-  constexpr double kThickness = 0.1;
-  const double inner_y = half_y - kThickness;
-  scene->add(aabb(-half_x, -half_y, 0.0, half_x, -inner_y, height))
-      .add(aabb(-half_x, inner_y, 0.0, half_x, half_y, height))
-      .add(aabb(-half_x, -inner_y, 0.0, -half_x + kThickness, inner_y, height))
-      .add(aabb(half_x - kThickness, -inner_y, 0.0, half_x, inner_y, height));
-}
-
-}  // namespace
-
 Scene makeRoomScene() {
   Scene scene;
   scene.add(floorAtZero());
@@ -109,32 +127,6 @@ Scene makeRoomScene() {
       .add(aabb(2.4, -2.9, 0.0, 3.2, -2.4, 1.8));  // cabinet
   return scene;
 }
-
-namespace {
-
-// A desk's top (x0, y0)-(x1, y1), 3 cm thick at 0.72-0.75 m, on four 4 cm legs at its corners.
-void addDesk(Scene* scene, double x0, double y0, double x1, double y1) {
-  constexpr double kTop = 0.72, kLeg = 0.04;
-  scene->add(aabb(x0, y0, kTop, x1, y1, kTop + 0.03));
-  for (double x : {x0, x1 - kLeg}) {
-    for (double y : {y0, y1 - kLeg}) scene->add(aabb(x, y, 0.0, x + kLeg, y + kLeg, kTop));
-  }
-}
-
-// A chair at (x, y) (its seat's corner), 0.45 m square: a 4 cm seat at 0.45 m on 3 cm legs and
-// a 4 cm back up to 0.95 m along its +y edge.
-void addChair(Scene* scene, double x, double y) {
-  constexpr double kSide = 0.45, kSeat = 0.45, kLeg = 0.03;
-  scene->add(aabb(x, y, kSeat, x + kSide, y + kSide, kSeat + 0.04))
-      .add(aabb(x, y + kSide - 0.04, kSeat + 0.04, x + kSide, y + kSide, 0.95));
-  for (double lx : {x, x + kSide - kLeg}) {
-    for (double ly : {y, y + kSide - kLeg}) {
-      scene->add(aabb(lx, ly, 0.0, lx + kLeg, ly + kLeg, kSeat));
-    }
-  }
-}
-
-}  // namespace
 
 Scene makeOfficeScene() {
   Scene scene;
