@@ -265,8 +265,17 @@ StoredBlock& VoxelMap::storedForWrite(std::uint64_t key) {
   auto it = blocks_.find(key);
   if (it == blocks_.end()) {
     std::optional<StoredBlock> spilled = takeSpilled(key);
+    if (watcher_ != nullptr && !rewriting_ && !spilled) {
+      watcher_->beforeFirstWrite(unpackKey3(key), nullptr);
+    }
     it = blocks_.emplace(key, spilled ? std::move(*spilled) : StoredBlock::newDense()).first;
     block_bytes_ += it->second.bytes();
+  }
+  // A block written since the watcher was set has been seen; a paged-in one (version 0) is seen
+  // again, and the watcher keeps its first sight.
+  if (watcher_ != nullptr && !rewriting_ && it->second.version() < watch_since_) {
+    VoxelBlock before;
+    watcher_->beforeFirstWrite(unpackKey3(key), &it->second.view(&before));
   }
   StoredBlock& result = it.value();
   if (result.version() != version_) {
@@ -447,6 +456,56 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
   }
   finishWrite();
   return changed;
+}
+
+void VoxelMap::setWriteWatcher(BlockWriteWatcher* watcher,
+                               const std::function<void(const BlockReader&)>& on_switch) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  if (on_switch) {
+    on_switch([this](const BlockIndex& block, VoxelBlock* out) {
+      VoxelBlock scratch;
+      const VoxelBlock* found = viewBlock(packKey(block), &scratch);
+      if (found == nullptr) return false;
+      *out = *found;
+      return true;
+    });
+  }
+  watcher_ = watcher;
+  // The next write call stamps its blocks with version_, every earlier one with less.
+  watch_since_ = version_;
+}
+
+void VoxelMap::rewriteBlocks(const std::vector<BlockIndex>& blocks,
+                             const std::function<void(const BlockIndex&, VoxelBlock&)>& fn) {
+  ReadAhead ahead = readSpilledAhead(blocks);
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  pageInSpilled(blocks, &ahead);
+  rewriting_ = true;
+  VoxelBlock scratch;
+  for (const BlockIndex& block_index : blocks) {
+    const std::uint64_t key = packKey(block_index);
+    const bool present = blocks_.find(key) != blocks_.end();
+    if (!present) {
+      scratch = VoxelBlock();
+    } else {
+      blocks_.find(key)->second.copyTo(&scratch);
+    }
+    fn(block_index, scratch);
+    if (scratch.known_count == 0) {
+      if (!present) continue;
+      auto it = blocks_.find(key);
+      block_bytes_ -= it->second.bytes();
+      blocks_.erase(it);
+      markRemoved(key);
+      continue;
+    }
+    StoredBlock& stored = storedForWrite(key);
+    block_bytes_ += stored.storeFrom(scratch, hybrid() ? kMaxSparseBricks : -1);  // -1: dense
+    // Unwatched: the watcher's next sight of this block is its first write by a sensor.
+    stored.setVersion(0);
+  }
+  rewriting_ = false;
+  finishWrite();
 }
 
 void VoxelMap::reset() {

@@ -104,6 +104,18 @@ struct CheckpointResult {
   double sync_seconds = 0.0;       // then the flush to disk, writers not waiting
 };
 
+// Sees what the map's writers change (VoxelMap::setWriteWatcher): how a submap records what its
+// stretch of frames wrote (mapping/submap_fusion.h) without a second integration.
+class BlockWriteWatcher {
+ public:
+  virtual ~BlockWriteWatcher() = default;
+  // Before a block's first write since the watcher was set; `before` is its contents then
+  // (nullptr: the map had no such block). May come again for a block that went to the spill store
+  // and came back: the first call holds its contents. Runs under the map's exclusive lock: must
+  // not call the map.
+  virtual void beforeFirstWrite(const BlockIndex& block, const VoxelBlock* before) = 0;
+};
+
 struct VoxelCounts {
   std::size_t occupied = 0;
   std::size_t free = 0;
@@ -209,6 +221,18 @@ class VoxelMap {
   std::size_t clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max);
   void reset();
   void setFocus(const Eigen::Vector3d& sensor_origin);
+  // Replaces the watcher of every later write call (nullptr: none). `on_switch`, if given, runs
+  // first, under the same exclusive lock, with a reader of the blocks as they are (false: no such
+  // block), so that the outgoing watcher can read what its writes left with no write between.
+  using BlockReader = std::function<bool(const BlockIndex&, VoxelBlock*)>;
+  void setWriteWatcher(BlockWriteWatcher* watcher,
+                       const std::function<void(const BlockReader&)>& on_switch = {});
+  // Rewrites blocks whole: fn(block_index, block) gets each block's contents (all unknown when
+  // the map has none) and leaves what the block is to hold; a block left without known voxels is
+  // removed. Serial, under one exclusive lock, logged as changes, and unseen by the write
+  // watcher: what a submap's move does to the fused map (mapping/submap_fusion.h).
+  void rewriteBlocks(const std::vector<BlockIndex>& blocks,
+                     const std::function<void(const BlockIndex&, VoxelBlock&)>& fn);
   // See "Checkpoints". stamp: recorded with it (e.g. the time). Writers wait for the transaction
   // (cost: the blocks written since the previous checkpoint), not for the flush to disk.
   // `layer`: a companion layer's records, written in the same transaction (map_checkpoints.h).
@@ -318,6 +342,9 @@ class VoxelMap {
   void forEachVoxelIf(const VoxelFn& fn, int which) const;
 
   VoxelMapConfig config_;
+  BlockWriteWatcher* watcher_ = nullptr;
+  std::uint64_t watch_since_ = 0;  // the version the watcher was set at
+  bool rewriting_ = false;         // rewriteBlocks: its writes are not the watcher's
   float min_log_odds_;
   float max_log_odds_;
   float threshold_log_odds_;

@@ -1,0 +1,142 @@
+// Submaps of a VoxelMap that can be moved after they were written: what lets the map follow a
+// SLAM system's loop closures.
+//
+// The mappers write the fused map (the VoxelMap every topic, file and checkpoint reads) as they
+// always have, with frames placed in the map by T_map_odom * T_odom_sensor, where T_map_odom is
+// the placement of the submap being written (the active one; fixed while it is written, so its
+// frames are placed by odometry alone, smooth and locally consistent). The fusion watches those
+// writes (VoxelMap::setWriteWatcher): when a submap is closed, what its frames changed in each
+// block, log-odds cell by cell (log_odds_deltas.h), becomes the submap. Adding every submap's
+// changes in turn, clamped, gives the fused map again; so when a correction moves a submap, the
+// blocks it covered before and covers now are rebuilt from the submaps that cover them, each
+// resampled at its own placement (nearest cell), in the order they were written. Nothing else
+// in the map is touched: without corrections the map is the one the mappers wrote, bit for bit.
+//
+// Thread safety: every public member function may be called from any thread. Frames hold a
+// FrameLease while they are placed and written, so that no submap is closed in between.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <utility>
+#include <vector>
+
+#include "occupancy_fusion/map/spatial_key.h"
+#include "occupancy_fusion/map/stored_block.h"
+#include "occupancy_fusion/map/voxel_map.h"
+
+namespace occupancy_fusion {
+
+struct SubmapFusionConfig {
+  // m. A new placement that moves no corner of a submap's blocks by more than this leaves the
+  // submap where it is (SLAM's small adjustments of old keyframes cost nothing). 0: one voxel.
+  double min_shift = 0.0;
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+// One submap as diagnostics and the trajectory corrections see it.
+struct SubmapInfo {
+  int id = 0;
+  bool active = false;     // being written
+  bool fixed = false;      // the map's contents from before the fusion began: never moved
+  double start_stamp = 0;  // s, first frame written into it (0: none yet)
+  double end_stamp = 0;    // s, last frame
+  Eigen::Isometry3d written = Eigen::Isometry3d::Identity();  // T_map_odom it was written with
+  Eigen::Isometry3d placed = Eigen::Isometry3d::Identity();   // T_map_odom it is shown with
+  std::size_t blocks = 0;  // blocks it changed (the active one: written so far)
+  std::size_t bytes = 0;   // memory of its changes
+  // m, the map-frame box of its blocks where it was written (empty: no blocks).
+  Eigen::AlignedBox3d bounds;
+};
+
+// How far moving the points of `box` from placement `from` to `to` carries any of them (m): at
+// one of its corners, for a rigid motion. Placements are T_map_odom; `written` the one the box's
+// coordinates were taken at. 0 for an empty box.
+double largestShift(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& written,
+                    const Eigen::Isometry3d& from, const Eigen::Isometry3d& to);
+
+// What one move of submaps did.
+struct SubmapMoveResult {
+  std::size_t moved = 0;             // submaps re-placed
+  std::size_t blocks_rewritten = 0;  // blocks of the fused map rebuilt
+  double seconds = 0.0;              // wall time, rebuild included
+};
+
+class SubmapFusion {
+ public:
+  // Starts watching `map` (which must outlive the fusion) with an active submap written at
+  // `T_map_odom`. What the map holds already becomes a fixed submap that is never moved.
+  SubmapFusion(VoxelMap* map, const SubmapFusionConfig& config,
+               const Eigen::Isometry3d& T_map_odom = Eigen::Isometry3d::Identity());
+  ~SubmapFusion();
+  SubmapFusion(const SubmapFusion&) = delete;
+  SubmapFusion& operator=(const SubmapFusion&) = delete;
+
+  // Held by a frame from its placement until its write is done: the active submap stays the
+  // same meanwhile.
+  class FrameLease {
+   public:
+    int submap() const { return submap_; }
+    // Where the frame's odometry pose is to be placed: T_map_sensor = T_map_odom() * T_odom_sensor.
+    const Eigen::Isometry3d& T_map_odom() const { return T_map_odom_; }
+
+   private:
+    friend class SubmapFusion;
+    std::shared_lock<std::shared_mutex> lock_;
+    int submap_ = 0;
+    Eigen::Isometry3d T_map_odom_;
+  };
+  // stamp (s, 0: unstamped) widens the active submap's time span.
+  FrameLease beginFrame(double stamp);
+
+  // Closes the active submap (it keeps its placement) and starts the next one, written with
+  // T_map_odom. Returns the new submap's id. A submap that changed nothing is reused.
+  int startSubmap(const Eigen::Isometry3d& T_map_odom);
+
+  // New placements (T_map_odom) by submap id; unknown ids are ignored. The active submap, when it
+  // moves, is closed first and the next one is written with its new placement (with nothing
+  // written yet, it is only placed anew).
+  SubmapMoveResult place(const std::vector<std::pair<int, Eigen::Isometry3d>>& placements);
+
+  std::vector<SubmapInfo> submaps() const;
+  int activeSubmap() const;
+  const SubmapFusionConfig& config() const { return config_; }
+  std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
+
+  // Empties the map and forgets every submap (the map server's reset).
+  void reset();
+
+ private:
+  struct ActiveWrites;
+  struct Submap;
+  using Placements = std::vector<std::pair<int, Eigen::Isometry3d>>;
+
+  int closeActiveLocked(const Eigen::Isometry3d& next_T_map_odom);
+  void addCoverage(int index);
+  void removeCoverage(int index);
+  std::vector<std::uint64_t> footprint(const Submap& submap) const;
+  bool movesBeyondThreshold(const Submap& submap, const Eigen::Isometry3d& placed) const;
+  void rebuild(const std::vector<std::uint64_t>& blocks);
+  void foldInto(const Submap& submap, const BlockIndex& block, VoxelBlock* cells) const;
+  void adoptExistingContents();
+
+  VoxelMap* map_;
+  SubmapFusionConfig config_;
+  double min_shift_;  // m, config_'s or one voxel
+
+  std::shared_mutex frames_mutex_;  // shared: frames in flight; unique: a submap closes
+  mutable std::mutex mutex_;        // the submaps and the coverage
+  std::vector<std::unique_ptr<Submap>> submaps_;  // closed ones, by id
+  std::unique_ptr<ActiveWrites> active_;          // id submaps_.size()
+  // For every block of the fused map, the closed submaps whose placed changes reach it, in the
+  // order they were written.
+  SpatialKeyMap<std::vector<int>> coverage_;
+};
+
+}  // namespace occupancy_fusion

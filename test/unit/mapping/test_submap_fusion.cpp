@@ -1,0 +1,252 @@
+// Submaps that move (mapping/submap_fusion.h): without a move the map is the one written, bit for
+// bit; a move carries a submap's cells to their new place and leaves the others as they were.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/mapping/submap_fusion.h"
+
+namespace occupancy_fusion {
+namespace {
+
+constexpr double kResolution = 0.1;
+
+VoxelMapConfig mapConfig() {
+  VoxelMapConfig config;
+  config.resolution = kResolution;
+  return config;
+}
+
+using Cells = std::map<std::tuple<int, int, int>, float>;
+
+Cells knownCells(const VoxelMap& map) {
+  Cells cells;
+  map.forEachKnownVoxel([&](const VoxelIndex& index, float value) {
+    cells[{index.x(), index.y(), index.z()}] = value;
+  });
+  return cells;
+}
+
+std::vector<Eigen::Vector3i> occupied(const VoxelMap& map) {
+  std::vector<Eigen::Vector3i> result;
+  map.forEachOccupiedVoxel([&](const VoxelIndex& index, float) { result.push_back(index); });
+  return result;
+}
+
+// A wall of points at x = wall_x, y in [-1, 1], z in [0, 1], seen from `origin`, both moved by
+// `T` (a drifted odometry's view of it).
+void seeWall(double wall_x, const Eigen::Vector3d& origin, const Eigen::Isometry3d& T,
+             VoxelMap* map) {
+  std::vector<Eigen::Vector3f> points;
+  for (double y = -1.0; y <= 1.0; y += 0.03) {
+    for (double z = 0.0; z <= 1.0; z += 0.03) {
+      points.push_back((T * Eigen::Vector3d(wall_x, y, z)).cast<float>());
+    }
+  }
+  PointCloudIntegrator().integrate(points, T * origin, map);
+}
+
+TEST(SubmapFusion, WithoutMovesTheMapIsTheOneWrittenBitForBit) {
+  VoxelMap watched(mapConfig()), plain(mapConfig());
+  SubmapFusion fusion(&watched, SubmapFusionConfig());
+  for (int frame = 0; frame < 12; ++frame) {
+    const Eigen::Vector3d origin(0.1 * frame, 0.05 * frame, 0.5);
+    for (VoxelMap* map : {&watched, &plain}) seeWall(2.0 + 0.2 * (frame % 3), origin, {}, map);
+    if (frame % 4 == 3) fusion.startSubmap(Eigen::Isometry3d::Identity());
+  }
+  // Placements at the written place move nothing.
+  SubmapMoveResult moved = fusion.place({{0, Eigen::Isometry3d::Identity()},
+                                         {1, Eigen::Isometry3d::Identity()},
+                                         {3, Eigen::Isometry3d::Identity()}});
+  EXPECT_EQ(moved.moved, 0u);
+  EXPECT_EQ(moved.blocks_rewritten, 0u);
+  EXPECT_EQ(fusion.submaps().size(), 4u);  // three closed, one active
+  EXPECT_EQ(knownCells(watched), knownCells(plain));
+}
+
+TEST(SubmapFusion, MovedAndMovedBackGivesTheMapAgain) {
+  VoxelMap watched(mapConfig()), plain(mapConfig());
+  SubmapFusion fusion(&watched, SubmapFusionConfig());
+  for (int frame = 0; frame < 9; ++frame) {
+    const Eigen::Vector3d origin(0.15 * frame, 0.0, 0.5);
+    for (VoxelMap* map : {&watched, &plain}) seeWall(2.5 - 0.1 * (frame % 2), origin, {}, map);
+    if (frame % 3 == 2) fusion.startSubmap(Eigen::Isometry3d::Identity());
+  }
+  const Eigen::Isometry3d away(Eigen::Translation3d(0.73, -0.41, 0.0) *
+                               Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()));
+  EXPECT_EQ(fusion.place({{1, away}}).moved, 1u);
+  EXPECT_NE(knownCells(watched), knownCells(plain));
+  EXPECT_EQ(fusion.place({{1, Eigen::Isometry3d::Identity()}}).moved, 1u);
+  // The changes add up to the written cells again, up to rounding.
+  const Cells expected = knownCells(plain), actual = knownCells(watched);
+  ASSERT_EQ(actual.size(), expected.size());
+  for (const auto& cell : expected) {
+    ASSERT_EQ(actual.count(cell.first), 1u);
+    EXPECT_NEAR(actual.at(cell.first), cell.second, 1e-5);
+  }
+}
+
+TEST(SubmapFusion, AWholeVoxelShiftCarriesEveryCellOfTheSubmapExactly) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, SubmapFusionConfig());
+  seeWall(1.55, Eigen::Vector3d(0, 0, 0.5), {}, &map);
+  const Cells written = knownCells(map);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  const Eigen::Isometry3d shift(Eigen::Translation3d(3 * kResolution, -2 * kResolution, 0.0));
+  EXPECT_EQ(fusion.place({{0, shift}}).moved, 1u);
+  Cells expected;
+  for (const auto& cell : written) {
+    const auto& [x, y, z] = cell.first;
+    expected[{x + 3, y - 2, z}] = cell.second;
+  }
+  EXPECT_EQ(knownCells(map), expected);  // the old place is unknown again: no ghost
+}
+
+TEST(SubmapFusion, ACorrectedDriftedSubmapLandsWhereTheTruePosesPutIt) {
+  // Submap 0 sees a wall from the true pose; submap 1 sees a second wall while its odometry has
+  // drifted by `drift`, then the localisation's correction places it at drift^-1.
+  const Eigen::Isometry3d drift(Eigen::Translation3d(0.42, -0.27, 0.0) *
+                                Eigen::AngleAxisd(0.12, Eigen::Vector3d::UnitZ()));
+  VoxelMap map(mapConfig()), truth(mapConfig());
+  SubmapFusion fusion(&map, SubmapFusionConfig());
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &truth);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  const Eigen::Isometry3d turned(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), drift * turned, &map);
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), turned, &truth);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+
+  // Nearest-cell resampling of a turned wall moves single cells by one voxel: count the occupied
+  // voxels of each map with one of the other's within one voxel.
+  const auto near = [](const VoxelMap& map, const Eigen::Vector3i& index) {
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (map.occupancy(index + Eigen::Vector3i(dx, dy, dz)) == Occupancy::kOccupied) {
+            return true;
+          }
+        }
+      }
+    }
+    return false;
+  };
+  const auto matched = [&](const VoxelMap& from, const VoxelMap& to) {
+    const std::vector<Eigen::Vector3i> cells = occupied(from);
+    std::size_t count = 0;
+    for (const Eigen::Vector3i& index : cells) count += near(to, index);
+    return static_cast<double>(count) / static_cast<double>(cells.size());
+  };
+  EXPECT_LT(matched(truth, map), 0.6);
+  EXPECT_LT(matched(map, truth), 0.6);
+  EXPECT_EQ(fusion.place({{1, drift.inverse()}}).moved, 1u);
+  EXPECT_GT(matched(truth, map), 0.98);  // the true walls are mapped
+  EXPECT_GT(matched(map, truth), 0.98);  // and no copy of them is left elsewhere
+  // Submap 0's wall is untouched.
+  EXPECT_EQ(map.occupancyAt({2.05, 0.05, 0.55}), Occupancy::kOccupied);
+}
+
+TEST(SubmapFusion, TheActiveSubmapsWritesStayOnTopOfARebuild) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, SubmapFusionConfig());
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);  // submap 0
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  const VoxelIndex mark(30, 1, 5), shared(20, 1, 5);  // in the active submap; on submap 0's wall
+  const float wall = *map.logOdds(shared);
+  map.updateVoxel(mark, 1.25f);
+  map.updateVoxel(shared, -0.5f);
+  fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.0, 0.0, 1.0))}});
+  EXPECT_FLOAT_EQ(*map.logOdds(mark), 1.25f);
+  // The wall left; the active submap's own change of that cell stays, from the prior.
+  EXPECT_NEAR(*map.logOdds(shared), -0.5f, 1e-6);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(20, 1, 15)), wall);
+  // Closing it later records only its own changes: moving submap 0 back restores the wall plus
+  // the active change.
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  fusion.place({{0, Eigen::Isometry3d::Identity()}});
+  EXPECT_NEAR(*map.logOdds(shared), wall - 0.5f, 1e-6);
+  EXPECT_FLOAT_EQ(*map.logOdds(mark), 1.25f);
+}
+
+TEST(SubmapFusion, AMovedActiveSubmapIsClosedAndTheNextIsWrittenAtTheNewPlace) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, SubmapFusionConfig());
+  {
+    const SubmapFusion::FrameLease lease = fusion.beginFrame(10.0);
+    EXPECT_EQ(lease.submap(), 0);
+    seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), lease.T_map_odom(), &map);
+  }
+  const Eigen::Isometry3d corrected(Eigen::Translation3d(0.0, 0.5, 0.0));
+  EXPECT_EQ(fusion.place({{0, corrected}}).moved, 1u);
+  const SubmapFusion::FrameLease lease = fusion.beginFrame(11.0);
+  EXPECT_EQ(lease.submap(), 1);
+  EXPECT_TRUE(lease.T_map_odom().isApprox(corrected));
+  const std::vector<SubmapInfo> submaps = fusion.submaps();
+  ASSERT_EQ(submaps.size(), 2u);
+  EXPECT_DOUBLE_EQ(submaps[0].start_stamp, 10.0);
+  EXPECT_TRUE(submaps[0].placed.isApprox(corrected));
+  EXPECT_TRUE(submaps[0].written.isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_EQ(map.occupancyAt({2.05, 0.55, 0.55}), Occupancy::kOccupied);
+}
+
+TEST(SubmapFusion, MovesBelowTheThresholdLeaveTheMapAlone) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, SubmapFusionConfig());  // one voxel
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  const Cells before = knownCells(map);
+  EXPECT_EQ(fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.04, 0.05, 0.0))}}).moved,
+            0u);
+  EXPECT_EQ(knownCells(map), before);
+  // A small turn that moves the far corner of the wall's blocks by more than a voxel counts.
+  EXPECT_EQ(
+      fusion.place({{0, Eigen::Isometry3d(Eigen::AngleAxisd(0.06, Eigen::Vector3d::UnitZ()))}})
+          .moved,
+      1u);
+}
+
+TEST(SubmapFusion, WhatTheMapHeldBeforeStaysWhereItIs) {
+  VoxelMap map(mapConfig());
+  map.updateVoxel(VoxelIndex(5, 5, 5), 2.0f);  // e.g. a resumed map
+  SubmapFusion fusion(&map, SubmapFusionConfig());
+  map.updateVoxel(VoxelIndex(5, 5, 5), 0.5f);
+  map.updateVoxel(VoxelIndex(6, 5, 5), 0.5f);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  const std::vector<SubmapInfo> submaps = fusion.submaps();
+  ASSERT_EQ(submaps.size(), 3u);
+  EXPECT_TRUE(submaps[0].fixed);
+  fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(5.0, 0, 0))},
+                {1, Eigen::Isometry3d(Eigen::Translation3d(5.0, 0, 0))}});
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(5, 5, 5)), 2.0f);  // fixed: stays
+  EXPECT_FALSE(map.logOdds(VoxelIndex(6, 5, 5)).has_value());
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(55, 5, 5)), 0.5f);  // submap 1's changes moved 5 m
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(56, 5, 5)), 0.5f);
+}
+
+TEST(SubmapFusion, ResetForgetsTheSubmaps) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, SubmapFusionConfig());
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  fusion.reset();
+  EXPECT_EQ(map.blockCount(), 0u);
+  EXPECT_EQ(fusion.submaps().size(), 1u);
+  map.updateVoxel(VoxelIndex(1, 1, 1), 1.0f);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(1.0, 0, 0))}});
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(11, 1, 1)), 1.0f);
+}
+
+TEST(SubmapFusion, RejectsANegativeThreshold) {
+  VoxelMap map(mapConfig());
+  SubmapFusionConfig config;
+  config.min_shift = -0.1;
+  EXPECT_THROW(SubmapFusion(&map, config), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace occupancy_fusion
