@@ -103,8 +103,58 @@ GridTile& GridLayer2D::tileForWrite(const TileIndex& tile) {
     it = tiles_.emplace(key, std::move(fresh)).first;
   }
   GridTile* found = it->second.get();
+  watch(key, found);
   markWritten(key, found);
   return *found;
+}
+
+void GridLayer2D::watch(std::uint64_t key, const GridTile* tile) {
+  // A tile written since the watcher was set has been seen; a paged-in one (version 0) is seen
+  // again, and the watcher keeps its first sight.
+  if (watcher_ == nullptr || rewriting_ || tile->version >= watch_since_) return;
+  watcher_->beforeFirstWrite(unpackKey2(key), tile->known_count > 0 ? tile : nullptr);
+}
+
+void GridLayer2D::setWriteWatcher(TileWriteWatcher* watcher,
+                                  const std::function<void(const TileReader&)>& on_switch) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  if (on_switch) {
+    on_switch([this](const TileIndex& tile, GridTile* out) {
+      const GridTile* found = readTile(packKey(tile), out);
+      if (found == nullptr) return false;
+      if (found != out) *out = *found;
+      return true;
+    });
+  }
+  watcher_ = watcher;
+  // The next write call stamps its tiles with version_, every earlier one with less.
+  watch_since_ = version_;
+}
+
+void GridLayer2D::rewriteTiles(const std::vector<TileIndex>& tiles,
+                               const std::function<void(const TileIndex&, GridTile&)>& fn) {
+  std::unique_lock<std::shared_mutex> lock(mutex_);
+  rewriting_ = true;
+  GridTile scratch;
+  for (const TileIndex& tile_index : tiles) {
+    const std::uint64_t key = packKey(tile_index);
+    const GridTile* current = readTile(key, &scratch);
+    if (current == nullptr) {
+      scratch = GridTile();
+    } else if (current != &scratch) {
+      scratch = *current;
+    }
+    fn(tile_index, scratch);
+    // A tile left without known cells stays, unknown: the layer's consumers only hear of changed
+    // tiles (GridChanges).
+    if (scratch.known_count == 0 && current == nullptr) continue;
+    GridTile& target = tileForWrite(tile_index);
+    target.log_odds = scratch.log_odds;
+    target.known_count = scratch.known_count;
+    target.version = 0;  // unwatched: the watcher's next sight is a sensor's write
+  }
+  rewriting_ = false;
+  finishWrite();
 }
 
 void GridLayer2D::finishWrite() {
@@ -319,6 +369,7 @@ std::size_t GridLayer2D::clearBox(const Eigen::Vector2d& min, const Eigen::Vecto
       if (!GridTile::isKnown(tile->log_odds[linear])) continue;
       const Eigen::Vector2d center = centerOf(cellIndex(tile_index, linear));
       if ((center.array() < min.array()).any() || (center.array() > max.array()).any()) continue;
+      watch(it->first, tile);
       tile->log_odds[linear] = min_log_odds_;
       markWritten(it->first, tile);
       ++changed;

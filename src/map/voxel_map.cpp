@@ -443,6 +443,9 @@ std::size_t VoxelMap::clearBox(const Eigen::Vector3d& min, const Eigen::Vector3d
       if (!VoxelBlock::isKnown(block.log_odds[linear])) continue;
       const Eigen::Vector3d center = centerOf(voxelIndex(block_index, linear));
       if ((center.array() < min.array()).any() || (center.array() > max.array()).any()) continue;
+      if (!touched && watcher_ != nullptr && stored.version() < watch_since_) {
+        watcher_->beforeFirstWrite(block_index, &block);
+      }
       block.log_odds[linear] = min_log_odds_;
       touched = true;
       ++changed;

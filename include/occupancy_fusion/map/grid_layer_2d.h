@@ -86,6 +86,8 @@ struct TileSpillStatus {
                              // (the tile read as unknown)
 };
 
+using TileWriteWatcher = CellsWriteWatcher<TileIndex, GridTile>;
+
 // Inclusive range of cell indices.
 struct CellBox {
   CellIndex min;
@@ -168,6 +170,13 @@ class GridLayer2D {
   // lower clamping bound. Returns the number of cells changed.
   std::size_t clearBox(const Eigen::Vector2d& min, const Eigen::Vector2d& max);
   void reset();
+  // As VoxelMap's: the watcher of every later write call, and whole tiles rewritten unseen by it
+  // (a tile left without known cells stays, all unknown).
+  using TileReader = std::function<bool(const TileIndex&, GridTile*)>;
+  void setWriteWatcher(TileWriteWatcher* watcher,
+                       const std::function<void(const TileReader&)>& on_switch = {});
+  void rewriteTiles(const std::vector<TileIndex>& tiles,
+                    const std::function<void(const TileIndex&, GridTile&)>& fn);
 
   // Iteration (under the shared lock). fn(cell index, log-odds).
   using CellFn = std::function<void(const CellIndex&, float)>;
@@ -200,7 +209,8 @@ class GridLayer2D {
   void enforceBound();  // caller holds the unique lock
   GridChanges changesSinceLocked(std::uint64_t version) const;
   void markWritten(std::uint64_t key, GridTile* tile);
-  void finishWrite();  // trims the change log, bumps the version
+  void watch(std::uint64_t key, const GridTile* tile);  // the write watcher's first sight
+  void finishWrite();                                   // trims the change log, bumps the version
   // Calls write_cell(tile, linear index in tile, value) for each non-NaN value of a dense window
   // (LogOddsRaster's layout), allocating tiles as needed. Caller holds the unique lock.
   template <typename WriteCell>
@@ -210,6 +220,9 @@ class GridLayer2D {
   std::vector<float> windowLocked(const CellIndex& origin_cell, int width, int height) const;
 
   GridLayer2DConfig config_;
+  TileWriteWatcher* watcher_ = nullptr;
+  std::uint64_t watch_since_ = 0;  // the version the watcher was set at
+  bool rewriting_ = false;         // rewriteTiles: its writes are not the watcher's
   float min_log_odds_;
   float max_log_odds_;
   float threshold_log_odds_;

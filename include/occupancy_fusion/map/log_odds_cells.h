@@ -42,4 +42,18 @@ struct LogOddsCells {
   std::uint64_t version = 0;  // version of the map or layer at the last write; kept by its owner
 };
 
+// Sees what a map's writers change (VoxelMap and GridLayer2D::setWriteWatcher): how a submap
+// records what its stretch of frames wrote (mapping/submap_fusion.h) without a second integration.
+// `Index` names a block or tile, `Cells` is its storage.
+template <class Index, class Cells>
+class CellsWriteWatcher {
+ public:
+  virtual ~CellsWriteWatcher() = default;
+  // Before a block's (tile's) first write since the watcher was set; `before` is its contents
+  // then (nullptr: the map had none). May come again for one that went to the spill store and
+  // came back: the first call holds its contents. Runs under the map's exclusive lock: must not
+  // call the map.
+  virtual void beforeFirstWrite(const Index& index, const Cells* before) = 0;
+};
+
 }  // namespace occupancy_fusion

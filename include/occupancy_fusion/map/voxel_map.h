@@ -104,17 +104,7 @@ struct CheckpointResult {
   double sync_seconds = 0.0;       // then the flush to disk, writers not waiting
 };
 
-// Sees what the map's writers change (VoxelMap::setWriteWatcher): how a submap records what its
-// stretch of frames wrote (mapping/submap_fusion.h) without a second integration.
-class BlockWriteWatcher {
- public:
-  virtual ~BlockWriteWatcher() = default;
-  // Before a block's first write since the watcher was set; `before` is its contents then
-  // (nullptr: the map had no such block). May come again for a block that went to the spill store
-  // and came back: the first call holds its contents. Runs under the map's exclusive lock: must
-  // not call the map.
-  virtual void beforeFirstWrite(const BlockIndex& block, const VoxelBlock* before) = 0;
-};
+using BlockWriteWatcher = CellsWriteWatcher<BlockIndex, VoxelBlock>;
 
 struct VoxelCounts {
   std::size_t occupied = 0;

@@ -1,15 +1,16 @@
-// Submaps of a VoxelMap that can be moved after they were written: what lets the map follow a
-// SLAM system's loop closures.
+// Submaps of a VoxelMap and its laser layer that can be moved after they were written: what lets
+// the map follow a SLAM system's loop closures.
 //
-// The mappers write the fused map (the VoxelMap every topic, file and checkpoint reads) as they
-// always have, with frames placed in the map by T_map_odom * T_odom_sensor, where T_map_odom is
-// the placement of the submap being written (the active one; fixed while it is written, so its
-// frames are placed by odometry alone, smooth and locally consistent). The fusion watches those
-// writes (VoxelMap::setWriteWatcher): when a submap is closed, what its frames changed in each
-// block, log-odds cell by cell (log_odds_deltas.h), becomes the submap. Adding every submap's
-// changes in turn, clamped, gives the fused map again; so when a correction moves a submap, the
-// blocks it covered before and covers now are rebuilt from the submaps that cover them, each
-// resampled at its own placement (nearest cell), in the order they were written. Nothing else
+// The mappers write the fused map (the VoxelMap and GridLayer2D every topic, file and checkpoint
+// reads) as they always have, with frames placed in the map by T_map_odom * T_odom_sensor, where
+// T_map_odom is the placement of the submap being written (the active one; fixed while it is
+// written, so its frames are placed by odometry alone, smooth and locally consistent). The fusion
+// watches those writes (setWriteWatcher): when a submap is closed, what its frames changed in each
+// block (and laser tile), log-odds cell by cell (log_odds_deltas.h), becomes the submap. Adding
+// every submap's changes in turn, clamped, gives the fused map again; so when a correction moves a
+// submap, the blocks it covered before and covers now are rebuilt from the submaps that cover them,
+// each resampled at its own placement (nearest cell; the layer's tiles by the placement's planar
+// part), in the order they were written. Nothing else
 // in the map is touched: without corrections the map is the one the mappers wrote, bit for bit.
 //
 // Thread safety: every public member function may be called from any thread. Frames hold a
@@ -26,8 +27,7 @@
 #include <utility>
 #include <vector>
 
-#include "occupancy_fusion/map/spatial_key.h"
-#include "occupancy_fusion/map/stored_block.h"
+#include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
@@ -50,8 +50,9 @@ struct SubmapInfo {
   Eigen::Isometry3d written = Eigen::Isometry3d::Identity();  // T_map_odom it was written with
   Eigen::Isometry3d placed = Eigen::Isometry3d::Identity();   // T_map_odom it is shown with
   std::size_t blocks = 0;  // blocks it changed (the active one: written so far)
+  std::size_t tiles = 0;   // laser layer tiles it changed
   std::size_t bytes = 0;   // memory of its changes
-  // m, the map-frame box of its blocks where it was written (empty: no blocks).
+  // m, the map-frame box of its blocks and tiles where it was written (empty: none).
   Eigen::AlignedBox3d bounds;
 };
 
@@ -70,9 +71,9 @@ struct SubmapMoveResult {
 
 class SubmapFusion {
  public:
-  // Starts watching `map` (which must outlive the fusion) with an active submap written at
-  // `T_map_odom`. What the map holds already becomes a fixed submap that is never moved.
-  SubmapFusion(VoxelMap* map, const SubmapFusionConfig& config,
+  // Starts watching `map` and `layer` (may be null; both must outlive the fusion) with an active
+  // submap written at `T_map_odom`. What they hold already becomes a fixed submap, never moved.
+  SubmapFusion(VoxelMap* map, GridLayer2D* layer, const SubmapFusionConfig& config,
                const Eigen::Isometry3d& T_map_odom = Eigen::Isometry3d::Identity());
   ~SubmapFusion();
   SubmapFusion(const SubmapFusion&) = delete;
@@ -109,34 +110,36 @@ class SubmapFusion {
   const SubmapFusionConfig& config() const { return config_; }
   std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
 
-  // Empties the map and forgets every submap (the map server's reset).
+  // Empties the map and layer and forgets every submap (the map server's reset).
   void reset();
 
  private:
-  struct ActiveWrites;
-  struct Submap;
+  struct Stores;
+  struct Meta {
+    int id = 0;
+    bool fixed = false;
+    double start = 0.0, end = 0.0;
+    Eigen::Isometry3d written = Eigen::Isometry3d::Identity();
+    Eigen::Isometry3d placed = Eigen::Isometry3d::Identity();
+  };
   using Placements = std::vector<std::pair<int, Eigen::Isometry3d>>;
 
-  int closeActiveLocked(const Eigen::Isometry3d& next_T_map_odom);
-  void addCoverage(int index);
-  void removeCoverage(int index);
-  std::vector<std::uint64_t> footprint(const Submap& submap) const;
-  bool movesBeyondThreshold(const Submap& submap, const Eigen::Isometry3d& placed) const;
-  void rebuild(const std::vector<std::uint64_t>& blocks);
-  void foldInto(const Submap& submap, const BlockIndex& block, VoxelBlock* cells) const;
-  void adoptExistingContents();
+  void closeActiveLocked(const Eigen::Isometry3d& next_T_map_odom);
+  Eigen::AlignedBox3d boundsOf(int id) const;
+  Eigen::AlignedBox3d activeBounds() const;
+  std::size_t activeBlocks() const;
 
   VoxelMap* map_;
+  GridLayer2D* layer_;
   SubmapFusionConfig config_;
   double min_shift_;  // m, config_'s or one voxel
 
   std::shared_mutex frames_mutex_;  // shared: frames in flight; unique: a submap closes
-  mutable std::mutex mutex_;        // the submaps and the coverage
-  std::vector<std::unique_ptr<Submap>> submaps_;  // closed ones, by id
-  std::unique_ptr<ActiveWrites> active_;          // id submaps_.size()
-  // For every block of the fused map, the closed submaps whose placed changes reach it, in the
-  // order they were written.
-  SpatialKeyMap<std::vector<int>> coverage_;
+  mutable std::mutex mutex_;        // the submaps
+  std::unique_ptr<Stores> stores_;
+  std::vector<Meta> closed_;  // by id
+  Meta active_;               // id closed_.size(); its stamps also change under stamp_mutex_
+  mutable std::mutex stamp_mutex_;
 };
 
 }  // namespace occupancy_fusion

@@ -52,7 +52,7 @@ void seeWall(double wall_x, const Eigen::Vector3d& origin, const Eigen::Isometry
 
 TEST(SubmapFusion, WithoutMovesTheMapIsTheOneWrittenBitForBit) {
   VoxelMap watched(mapConfig()), plain(mapConfig());
-  SubmapFusion fusion(&watched, SubmapFusionConfig());
+  SubmapFusion fusion(&watched, nullptr, SubmapFusionConfig());
   for (int frame = 0; frame < 12; ++frame) {
     const Eigen::Vector3d origin(0.1 * frame, 0.05 * frame, 0.5);
     for (VoxelMap* map : {&watched, &plain}) seeWall(2.0 + 0.2 * (frame % 3), origin, {}, map);
@@ -70,7 +70,7 @@ TEST(SubmapFusion, WithoutMovesTheMapIsTheOneWrittenBitForBit) {
 
 TEST(SubmapFusion, MovedAndMovedBackGivesTheMapAgain) {
   VoxelMap watched(mapConfig()), plain(mapConfig());
-  SubmapFusion fusion(&watched, SubmapFusionConfig());
+  SubmapFusion fusion(&watched, nullptr, SubmapFusionConfig());
   for (int frame = 0; frame < 9; ++frame) {
     const Eigen::Vector3d origin(0.15 * frame, 0.0, 0.5);
     for (VoxelMap* map : {&watched, &plain}) seeWall(2.5 - 0.1 * (frame % 2), origin, {}, map);
@@ -92,7 +92,7 @@ TEST(SubmapFusion, MovedAndMovedBackGivesTheMapAgain) {
 
 TEST(SubmapFusion, AWholeVoxelShiftCarriesEveryCellOfTheSubmapExactly) {
   VoxelMap map(mapConfig());
-  SubmapFusion fusion(&map, SubmapFusionConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
   seeWall(1.55, Eigen::Vector3d(0, 0, 0.5), {}, &map);
   const Cells written = knownCells(map);
   fusion.startSubmap(Eigen::Isometry3d::Identity());
@@ -112,7 +112,7 @@ TEST(SubmapFusion, ACorrectedDriftedSubmapLandsWhereTheTruePosesPutIt) {
   const Eigen::Isometry3d drift(Eigen::Translation3d(0.42, -0.27, 0.0) *
                                 Eigen::AngleAxisd(0.12, Eigen::Vector3d::UnitZ()));
   VoxelMap map(mapConfig()), truth(mapConfig());
-  SubmapFusion fusion(&map, SubmapFusionConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
   seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
   seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &truth);
   fusion.startSubmap(Eigen::Isometry3d::Identity());
@@ -152,7 +152,7 @@ TEST(SubmapFusion, ACorrectedDriftedSubmapLandsWhereTheTruePosesPutIt) {
 
 TEST(SubmapFusion, TheActiveSubmapsWritesStayOnTopOfARebuild) {
   VoxelMap map(mapConfig());
-  SubmapFusion fusion(&map, SubmapFusionConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
   seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);  // submap 0
   fusion.startSubmap(Eigen::Isometry3d::Identity());
   const VoxelIndex mark(30, 1, 5), shared(20, 1, 5);  // in the active submap; on submap 0's wall
@@ -174,7 +174,7 @@ TEST(SubmapFusion, TheActiveSubmapsWritesStayOnTopOfARebuild) {
 
 TEST(SubmapFusion, AMovedActiveSubmapIsClosedAndTheNextIsWrittenAtTheNewPlace) {
   VoxelMap map(mapConfig());
-  SubmapFusion fusion(&map, SubmapFusionConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
   {
     const SubmapFusion::FrameLease lease = fusion.beginFrame(10.0);
     EXPECT_EQ(lease.submap(), 0);
@@ -195,7 +195,7 @@ TEST(SubmapFusion, AMovedActiveSubmapIsClosedAndTheNextIsWrittenAtTheNewPlace) {
 
 TEST(SubmapFusion, MovesBelowTheThresholdLeaveTheMapAlone) {
   VoxelMap map(mapConfig());
-  SubmapFusion fusion(&map, SubmapFusionConfig());  // one voxel
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());  // one voxel
   seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
   fusion.startSubmap(Eigen::Isometry3d::Identity());
   const Cells before = knownCells(map);
@@ -212,7 +212,7 @@ TEST(SubmapFusion, MovesBelowTheThresholdLeaveTheMapAlone) {
 TEST(SubmapFusion, WhatTheMapHeldBeforeStaysWhereItIs) {
   VoxelMap map(mapConfig());
   map.updateVoxel(VoxelIndex(5, 5, 5), 2.0f);  // e.g. a resumed map
-  SubmapFusion fusion(&map, SubmapFusionConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
   map.updateVoxel(VoxelIndex(5, 5, 5), 0.5f);
   map.updateVoxel(VoxelIndex(6, 5, 5), 0.5f);
   fusion.startSubmap(Eigen::Isometry3d::Identity());
@@ -229,7 +229,7 @@ TEST(SubmapFusion, WhatTheMapHeldBeforeStaysWhereItIs) {
 
 TEST(SubmapFusion, ResetForgetsTheSubmaps) {
   VoxelMap map(mapConfig());
-  SubmapFusion fusion(&map, SubmapFusionConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
   seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
   fusion.startSubmap(Eigen::Isometry3d::Identity());
   fusion.reset();
@@ -241,11 +241,67 @@ TEST(SubmapFusion, ResetForgetsTheSubmaps) {
   EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(11, 1, 1)), 1.0f);
 }
 
+TEST(SubmapFusion, AClearedBoxIsPartOfTheSubmapThatClearedIt) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);  // submap 0
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  map.clearBox({1.95, -0.05, 0.45}, {2.15, 0.25, 0.75});  // submap 1: a hole in the wall
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  const Cells cleared = knownCells(map);
+  // Submap 0 moved away and back: the rebuild adds submap 1's clearing again.
+  fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0, 0, 3.0))}});
+  fusion.place({{0, Eigen::Isometry3d::Identity()}});
+  EXPECT_EQ(map.occupancyAt({2.05, 0.05, 0.55}), Occupancy::kFree);
+  const Cells rebuilt = knownCells(map);
+  ASSERT_EQ(rebuilt.size(), cleared.size());
+  for (const auto& cell : cleared) EXPECT_NEAR(rebuilt.at(cell.first), cell.second, 1e-5);
+}
+
+GridLayer2DConfig layerConfig() {
+  GridLayer2DConfig config;
+  config.resolution = kResolution;
+  return config;
+}
+
+// A laser's wall: occupied cells along y = wall_y from x = 0 to 3 m, free cells in front of it.
+void scanWall(double wall_y, GridLayer2D* layer) {
+  const CellIndex origin = layer->indexOf({0.0, 0.0});
+  const int width = 30, height = layer->indexOf({0.0, wall_y}).y() - origin.y() + 1;
+  std::vector<float> raster(static_cast<std::size_t>(width * height), -0.4f);
+  for (int x = 0; x < width; ++x)
+    raster[static_cast<std::size_t>(x + width * (height - 1))] = 0.85f;
+  layer->addRaster(origin, width, height, raster.data());
+}
+
+TEST(SubmapFusion, TheLaserLayerMovesWithTheMapsPlanarPlacement) {
+  VoxelMap map(mapConfig());
+  GridLayer2D layer(layerConfig());
+  SubmapFusion fusion(&map, &layer, SubmapFusionConfig());
+  scanWall(1.0,
+           &layer);  // submap 0, drifted: the wall is truly 0.3 m farther and 0.5 m to the right
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  scanWall(2.5, &layer);  // submap 1, active
+  const float wall = *layer.logOdds(layer.indexOf({1.05, 1.05}));
+  const auto moved = fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.5, 0.3, 0.0))}});
+  EXPECT_EQ(moved.moved, 1u);
+  // Where the wall was: submap 0's free cell from (0.55, 0.75), then submap 1's miss.
+  EXPECT_NEAR(*layer.logOdds(layer.indexOf({1.05, 1.05})), -0.8f, 1e-5);
+  EXPECT_FLOAT_EQ(*layer.logOdds(layer.indexOf({1.55, 1.35})), wall);  // 1.05 + 0.5, + 0.3
+  EXPECT_EQ(layer.occupancyAt({3.45, 1.35}), Occupancy::kOccupied);    // x 2.95 + 0.5
+  // Submap 1's own cells stay, its wall on top of submap 0's moved free space.
+  EXPECT_EQ(layer.occupancyAt({0.05, 2.55}), Occupancy::kOccupied);
+  EXPECT_EQ(layer.occupancyAt({0.55, 1.05}), Occupancy::kFree);  // submap 1's free cells
+  const std::vector<SubmapInfo> submaps = fusion.submaps();
+  EXPECT_EQ(submaps[0].blocks, 0u);
+  EXPECT_GT(submaps[0].tiles, 0u);
+}
+
 TEST(SubmapFusion, RejectsANegativeThreshold) {
   VoxelMap map(mapConfig());
   SubmapFusionConfig config;
   config.min_shift = -0.1;
-  EXPECT_THROW(SubmapFusion(&map, config), std::invalid_argument);
+  EXPECT_THROW(SubmapFusion(&map, nullptr, config), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,0 +1,388 @@
+// The submaps of one store of cells (the VoxelMap's blocks, the laser layer's tiles): what each
+// submap changed there, where its changes reach at its placement, and the rebuild of the store's
+// blocks from them. SubmapFusion keeps one per store and the submaps' ids, stamps and placements;
+// this part is the same for both stores, up to StoreTraits (below).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+#include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/log_odds_deltas.h"
+#include "occupancy_fusion/map/spatial_key.h"
+#include "occupancy_fusion/map/stored_block.h"
+#include "occupancy_fusion/map/voxel_map.h"
+
+namespace occupancy_fusion {
+
+// The VoxelMap's blocks: changes kept sparse by bricks where few are touched.
+struct VoxelStoreTraits {
+  using Store = VoxelMap;
+  using Cells = VoxelBlock;
+  using Index = Eigen::Vector3i;
+  using Stored = StoredBlock;
+  static constexpr int kCellCount = VoxelBlock::kVolume;
+
+  static std::uint64_t key(const Index& index) { return packKey(index); }
+  static Index unkey(std::uint64_t key) { return unpackKey3(key); }
+  static Index containerOf(const Index& cell) { return VoxelMap::blockOf(cell); }
+  static int linearOf(const Index& cell) { return VoxelMap::linearIndexInBlock(cell); }
+  static Index cellOf(const Index& container, int linear) {
+    return VoxelMap::voxelIndex(container, linear);
+  }
+  // A cell's index as a point of the map frame (m, its corner) and back.
+  static Eigen::Vector3d point(const Eigen::Vector3d& cell) { return cell; }
+  static Index floorIndex(const Eigen::Vector3d& scaled) {
+    return scaled.array().floor().cast<int>();
+  }
+  static int side() { return VoxelBlock::kSide; }
+
+  static Stored store(const Cells& changes) {
+    StoredBlock stored = StoredBlock::newDense();
+    *stored.dense() = changes;
+    stored.settle(VoxelMap::kMaxSparseBricks);
+    return stored;
+  }
+  static const Cells& view(const Stored& stored, Cells* scratch) { return stored.view(scratch); }
+  static std::size_t bytes(const Stored& stored) { return stored.bytes(); }
+
+  static void setWriteWatcher(Store* store, CellsWriteWatcher<Index, Cells>* watcher,
+                              const std::function<void(const VoxelMap::BlockReader&)>& on_switch) {
+    store->setWriteWatcher(watcher, on_switch);
+  }
+  static void rewrite(Store* store, const std::vector<Index>& blocks,
+                      const std::function<void(const Index&, Cells&)>& fn) {
+    store->rewriteBlocks(blocks, fn);
+  }
+  static std::vector<std::pair<Index, Cells>> copyAll(const Store& store) {
+    return store.copyBlocks();
+  }
+  static std::size_t count(const Store& store) { return store.blockCount(); }
+};
+
+// The laser layer's tiles, in the map's x-y plane: a placement's planar part moves them.
+struct TileStoreTraits {
+  using Store = GridLayer2D;
+  using Cells = GridTile;
+  using Index = Eigen::Vector2i;
+  using Stored = std::unique_ptr<GridTile>;
+  static constexpr int kCellCount = GridTile::kArea;
+
+  static std::uint64_t key(const Index& index) { return packKey(index); }
+  static Index unkey(std::uint64_t key) { return unpackKey2(key); }
+  static Index containerOf(const Index& cell) { return GridLayer2D::tileOf(cell); }
+  static int linearOf(const Index& cell) { return GridLayer2D::linearIndexInTile(cell); }
+  static Index cellOf(const Index& container, int linear) {
+    return GridLayer2D::cellIndex(container, linear);
+  }
+  static Eigen::Vector3d point(const Eigen::Vector2d& cell) { return {cell.x(), cell.y(), 0.0}; }
+  static Index floorIndex(const Eigen::Vector3d& scaled) {
+    return scaled.head<2>().array().floor().cast<int>();
+  }
+  static int side() { return GridTile::kSide; }
+
+  static Stored store(const Cells& changes) { return std::make_unique<GridTile>(changes); }
+  static const Cells& view(const Stored& stored, Cells*) { return *stored; }
+  static std::size_t bytes(const Stored&) { return sizeof(GridTile); }
+
+  static void setWriteWatcher(
+      Store* store, CellsWriteWatcher<Index, Cells>* watcher,
+      const std::function<void(const GridLayer2D::TileReader&)>& on_switch) {
+    store->setWriteWatcher(watcher, on_switch);
+  }
+  static void rewrite(Store* store, const std::vector<Index>& tiles,
+                      const std::function<void(const Index&, Cells&)>& fn) {
+    store->rewriteTiles(tiles, fn);
+  }
+  static std::vector<std::pair<Index, Cells>> copyAll(const Store& store) {
+    std::vector<std::pair<Index, Cells>> tiles;
+    store.forEachTile([&](const Index& index, const Cells& tile) {
+      if (tile.known_count > 0) tiles.emplace_back(index, tile);
+    });
+    return tiles;
+  }
+  static std::size_t count(const Store& store) { return store.knownCellCount(); }
+};
+
+// Where a submap was written and is shown (T_map_odom each).
+struct SubmapPlacement {
+  Eigen::Isometry3d written = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d placed = Eigen::Isometry3d::Identity();
+  bool atWrittenPlace() const { return placed.matrix() == written.matrix(); }
+};
+
+template <class Traits>
+class StoreSubmaps {
+ public:
+  using Store = typename Traits::Store;
+  using Cells = typename Traits::Cells;
+  using Index = typename Traits::Index;
+  using Vector = Eigen::Matrix<double, Index::RowsAtCompileTime, 1>;
+
+  explicit StoreSubmaps(Store* store)
+      : store_(store), active_(std::make_unique<ActiveWrites>(store->resolution())) {}
+  ~StoreSubmaps() { Traits::setWriteWatcher(store_, nullptr, {}); }
+
+  // What the store holds now as the next submap's changes (the map's contents before submaps).
+  void adoptExistingContents() {
+    Record record;
+    for (const auto& entry : Traits::copyAll(*store_)) {
+      // From unknown, a cell's change is its value.
+      record.add(entry.first, Traits::store(entry.second), cellSide());
+    }
+    records_.push_back(std::move(record));
+  }
+  void startWatching() { Traits::setWriteWatcher(store_, active_.get(), {}); }
+
+  // Closes the active submap into the next record and starts the next one, under the store's
+  // lock, so that no write comes between.
+  void closeActive() {
+    Record record;
+    auto next = std::make_unique<ActiveWrites>(cellSide());
+    Traits::setWriteWatcher(store_, next.get(), [&](const auto& read) {
+      Cells after, changes;
+      for (const auto& entry : active_->before) {
+        if (!read(Traits::unkey(entry.first), &after)) after = Cells();
+        if (logOddsChanges(*entry.second, after, &changes) == 0) continue;
+        record.add(Traits::unkey(entry.first), Traits::store(changes), cellSide());
+      }
+    });
+    active_ = std::move(next);
+    records_.push_back(std::move(record));
+  }
+
+  // The map-frame box of the active submap's blocks so far, and of a closed one's (written).
+  Eigen::AlignedBox3d activeBounds() const {
+    std::lock_guard<std::mutex> lock(active_->info_mutex);
+    return active_->bounds;
+  }
+  std::size_t activeBlocks() const {
+    std::lock_guard<std::mutex> lock(active_->info_mutex);
+    return active_->count;
+  }
+  bool holdsContents() const { return Traits::count(*store_) > 0; }
+  const Eigen::AlignedBox3d& bounds(int id) const { return records_[id].bounds; }
+  std::size_t blocks(int id) const { return records_[id].changes.size(); }
+  std::size_t bytes(int id) const { return records_[id].bytes; }
+  std::size_t records() const { return records_.size(); }
+
+  // Submap `id` re-placed: its coverage follows; the store's blocks it covered and covers are
+  // added to `touched`.
+  void move(int id, const SubmapPlacement& placement, SpatialKeySet* touched) {
+    Record& record = records_[id];
+    touched->insert(record.footprint.begin(), record.footprint.end());
+    removeCoverage(id);
+    addCoverage(id, placement);
+    touched->insert(record.footprint.begin(), record.footprint.end());
+  }
+  void cover(int id, const SubmapPlacement& placement) { addCoverage(id, placement); }
+
+  // The blocks rebuilt from the closed submaps at their placements (by id), with the active
+  // submap's writes so far on top.
+  void rebuild(const SpatialKeySet& touched, const std::vector<SubmapPlacement>& placements) {
+    if (touched.empty()) return;
+    const std::vector<std::uint64_t> keys(touched.begin(), touched.end());
+    std::vector<Cells> sums(keys.size());
+    const long count = static_cast<long>(keys.size());
+#pragma omp parallel for schedule(dynamic, 8)
+    for (long i = 0; i < count; ++i) {
+      auto it = coverage_.find(keys[i]);
+      if (it == coverage_.end()) continue;
+      for (int id : it->second) foldInto(id, placements[id], Traits::unkey(keys[i]), &sums[i]);
+    }
+    SpatialKeyMap<std::size_t> position;
+    std::vector<Index> indices;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      position.emplace(keys[i], i);
+      indices.push_back(Traits::unkey(keys[i]));
+    }
+    const float min = store_->minLogOdds(), max = store_->maxLogOdds();
+    // Under the store's lock: the active submap's changes so far stay on top of the new sum.
+    Traits::rewrite(store_, indices, [&](const Index& index, Cells& contents) {
+      const Cells& sum = sums[position.at(Traits::key(index))];
+      auto it = active_->before.find(Traits::key(index));
+      if (it == active_->before.end()) {
+        contents = sum;
+        return;
+      }
+      Cells active_changes;
+      logOddsChanges(*it->second, contents, &active_changes);
+      *it.value() = sum;
+      contents = sum;
+      addLogOddsChanges(active_changes, min, max, &contents);
+    });
+  }
+
+  // Forgets every submap and the active one's sights (the store itself is reset by the caller).
+  void reset() {
+    auto next = std::make_unique<ActiveWrites>(cellSide());
+    Traits::setWriteWatcher(store_, next.get(), {});
+    active_ = std::move(next);
+    records_.clear();
+    coverage_.clear();
+  }
+
+  std::size_t coverageBytes() const {
+    std::size_t bytes = 0;
+    for (const auto& entry : coverage_) {
+      bytes += sizeof(entry) + entry.second.capacity() * sizeof(int);
+    }
+    return bytes;
+  }
+
+ private:
+  // The active submap: each block's contents before its first write since it began. Touched
+  // under the store's exclusive lock only, apart from info_mutex's fields.
+  struct ActiveWrites : CellsWriteWatcher<Index, Cells> {
+    explicit ActiveWrites(double side) : cell_side(side) {}
+    void beforeFirstWrite(const Index& index, const Cells* contents) override {
+      auto inserted = before.try_emplace(Traits::key(index));
+      if (!inserted.second) return;
+      inserted.first.value() =
+          contents != nullptr ? std::make_unique<Cells>(*contents) : std::make_unique<Cells>();
+      std::lock_guard<std::mutex> lock(info_mutex);
+      ++count;
+      bounds.extend(containerBox(index, cell_side));
+    }
+    SpatialKeyMap<std::unique_ptr<Cells>> before;
+    mutable std::mutex info_mutex;
+    std::size_t count = 0;
+    Eigen::AlignedBox3d bounds;
+    const double cell_side;
+  };
+
+  struct Record {
+    SpatialKeyMap<typename Traits::Stored> changes;
+    std::size_t bytes = 0;
+    Eigen::AlignedBox3d bounds;            // of its blocks, where written
+    std::vector<std::uint64_t> footprint;  // the store's blocks its placed changes reach
+
+    void add(const Index& index, typename Traits::Stored stored, double cell_side) {
+      bytes += Traits::bytes(stored);
+      bounds.extend(containerBox(index, cell_side));
+      changes.emplace(Traits::key(index), std::move(stored));
+    }
+  };
+
+  double cellSide() const { return store_->resolution(); }
+
+  // The map-frame box (m) of a block or tile (a tile's is flat, at z = 0).
+  static Eigen::AlignedBox3d containerBox(const Index& index, double cell_side) {
+    const double side = cell_side * Traits::side();
+    const Vector lo = index.template cast<double>() * side;
+    const Vector hi = lo + Vector::Constant(side);
+    return Eigen::AlignedBox3d(Traits::point(lo), Traits::point(hi));
+  }
+
+  std::vector<std::uint64_t> footprint(const Record& record,
+                                       const SubmapPlacement& placement) const {
+    std::vector<std::uint64_t> keys;
+    if (placement.atWrittenPlace()) {
+      for (const auto& entry : record.changes) keys.push_back(entry.first);
+      return keys;
+    }
+    // Each changed block's corners moved: the blocks of their bounding box.
+    const Eigen::Isometry3d moved = placement.placed * placement.written.inverse();
+    const double side = cellSide() * Traits::side();
+    SpatialKeySet reached;
+    for (const auto& entry : record.changes) {
+      const Eigen::AlignedBox3d box = containerBox(Traits::unkey(entry.first), cellSide());
+      Eigen::AlignedBox3d to;
+      for (int i = 0; i < 8; ++i) {
+        to.extend(moved * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i)));
+      }
+      const Index from = Traits::floorIndex(to.min() / side);
+      const Index last = Traits::floorIndex(to.max() / side);
+      forEachIndexIn(from, last, [&](const Index& index) { reached.insert(Traits::key(index)); });
+    }
+    keys.assign(reached.begin(), reached.end());
+    return keys;
+  }
+
+  template <class Fn>
+  static void forEachIndexIn(const Index& from, const Index& last, Fn fn) {
+    Index index = from;
+    while (true) {
+      fn(index);
+      int axis = 0;
+      while (axis < Index::RowsAtCompileTime && index[axis] == last[axis]) {
+        index[axis] = from[axis];
+        ++axis;
+      }
+      if (axis == Index::RowsAtCompileTime) return;
+      ++index[axis];
+    }
+  }
+
+  void addCoverage(int id, const SubmapPlacement& placement) {
+    Record& record = records_[id];
+    record.footprint = footprint(record, placement);
+    for (std::uint64_t key : record.footprint) {
+      std::vector<int>& covering = coverage_[key];
+      covering.insert(std::upper_bound(covering.begin(), covering.end(), id), id);
+    }
+  }
+
+  void removeCoverage(int id) {
+    for (std::uint64_t key : records_[id].footprint) {
+      auto it = coverage_.find(key);
+      if (it == coverage_.end()) continue;
+      std::vector<int>& covering = it.value();
+      covering.erase(std::remove(covering.begin(), covering.end(), id), covering.end());
+      if (covering.empty()) coverage_.erase(it);
+    }
+  }
+
+  // Submap `id`'s changes added to block `index`'s cells: each cell takes the change of the
+  // submap's cell under its centre (nearest cell) at the submap's placement.
+  void foldInto(int id, const SubmapPlacement& placement, const Index& index, Cells* cells) const {
+    const Record& record = records_[id];
+    const float min = store_->minLogOdds(), max = store_->maxLogOdds();
+    Cells scratch;
+    if (placement.atWrittenPlace()) {
+      auto it = record.changes.find(Traits::key(index));
+      if (it != record.changes.end()) {
+        addLogOddsChanges(Traits::view(it->second, &scratch), min, max, cells);
+      }
+      return;
+    }
+    const Eigen::Isometry3d to_written = placement.written * placement.placed.inverse();
+    const double resolution = cellSide();
+    std::uint64_t cached_key = 0;
+    const Cells* source = nullptr;
+    bool cached = false;
+    for (int linear = 0; linear < Traits::kCellCount; ++linear) {
+      const Vector center =
+          (Traits::cellOf(index, linear).template cast<double>() + Vector::Constant(0.5)) *
+          resolution;
+      const Index cell = Traits::floorIndex(to_written * Traits::point(center) / resolution);
+      const std::uint64_t key = Traits::key(Traits::containerOf(cell));
+      if (!cached || key != cached_key) {
+        auto it = record.changes.find(key);
+        source = it == record.changes.end() ? nullptr : &Traits::view(it->second, &scratch);
+        cached_key = key;
+        cached = true;
+      }
+      if (source == nullptr) continue;
+      const float change = source->log_odds[Traits::linearOf(cell)];
+      cells->set(linear, addLogOddsChange(cells->log_odds[linear], change, min, max));
+    }
+  }
+
+  Store* store_;
+  std::unique_ptr<ActiveWrites> active_;
+  std::deque<Record> records_;  // by submap id (a deque: records move, never copy)
+  // For every block of the store, the closed submaps whose placed changes reach it, in the order
+  // they were written.
+  SpatialKeyMap<std::vector<int>> coverage_;
+};
+
+}  // namespace occupancy_fusion
