@@ -53,6 +53,7 @@ void MappingSessionConfig::validate() const {
     throw std::invalid_argument("laser/max_tilt must be in [0, pi/2) rad");
   }
   fused_grid.validate();
+  reanchoring.validate();
 }
 
 MappingSessionConfig readMappingSessionConfig(const ParameterSource& source) {
@@ -66,6 +67,7 @@ MappingSessionConfig readMappingSessionConfig(const ParameterSource& source) {
   source.get("laser/max_tilt", &config.laser_max_tilt);
   if (hasKey(source, "observation_sources")) config.laser_sources = readLaserSourceConfigs(source);
   config.fused_grid = readFusedGridConfig(source);
+  config.reanchoring = readReanchoringConfig(source);
   config.validate();
   return config;
 }
@@ -112,6 +114,10 @@ MappingSession::MappingSession(const MappingSessionConfig& config, VoxelMap* vox
   }
   if (own_voxels_ && own_layer_) {
     checkpoints_ = std::make_unique<MapCheckpoints>(voxels_, layer_);
+    if (config_.reanchoring.enabled()) {
+      own_reanchoring_ = std::make_unique<MapReanchoring>(voxels_, layer_, config_.reanchoring);
+      reanchoring_ = own_reanchoring_.get();
+    }
   }
   for (const LaserSourceConfig& laser_source : config_.laser_sources) {
     source_integrators_.push_back(std::make_unique<PolarLaserIntegrator>(laser_source.integrator));
@@ -121,7 +127,8 @@ MappingSession::MappingSession(const MappingSessionConfig& config, VoxelMap* vox
 FrameOutcome MappingSession::integrate(const PointCloudFrame& frame) {
   const auto start = std::chrono::steady_clock::now();
   Eigen::Isometry3d map_T_sensor;
-  FrameOutcome outcome = place(frame.header, frame.header.frame_id, &map_T_sensor);
+  std::optional<MapReanchoring::PlacedFrame> lease;
+  FrameOutcome outcome = place(frame.header, frame.header.frame_id, &map_T_sensor, &lease);
   if (outcome.drop != nullptr) return outcome;
   // The sensor sits at the origin of the cloud's frame.
   last_point_cloud_ =
@@ -141,7 +148,8 @@ FrameOutcome MappingSession::integrate(const DepthImageFrame& frame) {
                 error.what());
   }
   Eigen::Isometry3d map_T_camera;
-  FrameOutcome outcome = place(frame.header, frame.header.frame_id, &map_T_camera);
+  std::optional<MapReanchoring::PlacedFrame> lease;
+  FrameOutcome outcome = place(frame.header, frame.header.frame_id, &map_T_camera, &lease);
   if (outcome.drop != nullptr) return outcome;
   last_depth_ = made(&depth_integrator_, config_.depth)
                     .integrate(frame.view(), frame.camera, map_T_camera, voxels_);
@@ -162,7 +170,8 @@ FrameOutcome MappingSession::integrate(const DisparityFrame& frame) {
                 error.what());
   }
   Eigen::Isometry3d map_T_camera;
-  FrameOutcome outcome = place(frame.header, frame.header.frame_id, &map_T_camera);
+  std::optional<MapReanchoring::PlacedFrame> lease;
+  FrameOutcome outcome = place(frame.header, frame.header.frame_id, &map_T_camera, &lease);
   if (outcome.drop != nullptr) return outcome;
   last_stereo_ = made(&stereo_integrator_, config_.stereo)
                      .integrate(frame.view(), frame.camera, map_T_camera, voxels_);
@@ -179,7 +188,8 @@ FrameOutcome MappingSession::integrate(const LaserScanFrame& frame) {
   }
   const std::string sensor_frame = sensorFrameOf(frame.header);
   Eigen::Isometry3d map_T_sensor;
-  FrameOutcome outcome = place(frame.header, sensor_frame, &map_T_sensor);
+  std::optional<MapReanchoring::PlacedFrame> lease;
+  FrameOutcome outcome = place(frame.header, sensor_frame, &map_T_sensor, &lease);
   if (outcome.drop != nullptr) return outcome;
   PlacedScan placed;
   try {
@@ -225,8 +235,17 @@ OccupancyRaster MappingSession::fusedGrid() const {
   return projectToRaster(*voxels_, layer_, config_.fused_grid);
 }
 
+SubmapMoveResult MappingSession::onPath(const std::vector<StampedPose>& path, double stamp) {
+  if (reanchoring_ == nullptr ||
+      reanchoring_->config().source != ReanchoringConfig::Source::kPath) {
+    return {};
+  }
+  return reanchoring_->applyPath(path, stamp);
+}
+
 FrameOutcome MappingSession::place(const FrameHeader& header, const std::string& sensor_frame,
-                                   Eigen::Isometry3d* map_T_sensor) {
+                                   Eigen::Isometry3d* map_T_sensor,
+                                   std::optional<MapReanchoring::PlacedFrame>* lease) {
   if (header.stamp != 0.0) {  // 0: unstamped (files without times), never a duplicate
     const auto last = last_stamp_.find(header.kind + '|' + header.frame_id);
     if (last != last_stamp_.end() && last->second == header.stamp) {
@@ -236,10 +255,13 @@ FrameOutcome MappingSession::place(const FrameHeader& header, const std::string&
     }
   }
   std::string why;
-  const std::optional<Eigen::Isometry3d> pose =
-      header.T_map_sensor ? header.T_map_sensor
-      : poses_ == nullptr ? std::nullopt
-                          : poses_->lookup(config_.frame_id, sensor_frame, header.stamp, &why);
+  std::optional<Eigen::Isometry3d> pose = header.T_map_sensor;
+  if (!pose && poses_ != nullptr && reanchoring_ != nullptr) {
+    *lease = reanchoring_->placeFrame(*poses_, config_.frame_id, sensor_frame, header.stamp, &why);
+    if (*lease) pose = (*lease)->T_map_sensor;
+  } else if (!pose && poses_ != nullptr) {
+    pose = poses_->lookup(config_.frame_id, sensor_frame, header.stamp, &why);
+  }
   if (!pose) {
     return drop(header, kDropNoPose,
                 "no transform from '" + sensor_frame + "' to '" + config_.frame_id + "'",

@@ -112,7 +112,14 @@ int SubmapFusion::startSubmap(const Eigen::Isometry3d& T_map_odom) {
   return active_.id;
 }
 
-void SubmapFusion::closeActiveLocked(const Eigen::Isometry3d& next_T_map_odom) {
+int SubmapFusion::startSubmap() {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (activeBlocks() > 0) closeActiveLocked(active_.written);
+  return active_.id;
+}
+
+void SubmapFusion::closeActiveLocked(Eigen::Isometry3d next_T_map_odom) {
   stores_->forEach([](auto& store) { store.closeActive(); });
   {
     std::lock_guard<std::mutex> stamps(stamp_mutex_);
@@ -125,21 +132,34 @@ void SubmapFusion::closeActiveLocked(const Eigen::Isometry3d& next_T_map_odom) {
   active_.written = active_.placed = next_T_map_odom;
 }
 
-SubmapMoveResult SubmapFusion::place(const Placements& placements) {
+void SubmapFusion::placeActiveLocked(const Eigen::Isometry3d& placed,
+                                     const Eigen::Isometry3d& next) {
+  const Eigen::AlignedBox3d bounds = activeBounds();
+  if (activeBlocks() == 0) {
+    active_.written = active_.placed = next;
+    return;
+  }
+  const bool moves = largestShift(bounds, active_.written, active_.written, placed) > min_shift_;
+  const bool next_moves = largestShift(bounds, active_.written, active_.written, next) > min_shift_;
+  // Closed at its written place; the loop over the closed submaps then moves it to `placed`.
+  if (moves || next_moves) closeActiveLocked(next);
+}
+
+SubmapMoveResult SubmapFusion::place(const Placements& placements,
+                                     const std::optional<Eigen::Isometry3d>& next) {
   const auto start = std::chrono::steady_clock::now();
   SubmapMoveResult result;
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
-  for (const auto& placement : placements) {
-    // The active submap moves as a closed one: its next frames are written at the new place.
-    if (placement.first != active_.id) continue;
-    if (activeBlocks() == 0) {
-      active_.written = active_.placed = placement.second;
-    } else if (largestShift(activeBounds(), active_.written, active_.written, placement.second) >
-               min_shift_) {
-      closeActiveLocked(placement.second);
-    }
-    break;
+  const int active_id = active_.id;
+  const auto active_placement =
+      std::find_if(placements.begin(), placements.end(),
+                   [&](const auto& placement) { return placement.first == active_id; });
+  // The active submap moves as a closed one: its next frames are written at the new place.
+  if (active_placement != placements.end() || next) {
+    const Eigen::Isometry3d placed =
+        active_placement != placements.end() ? active_placement->second : active_.written;
+    placeActiveLocked(placed, next ? *next : placed);
   }
   frames.unlock();  // frames go on into the new active submap while the map is rebuilt
   SpatialKeySet touched_blocks, touched_tiles;

@@ -111,29 +111,4 @@ std::vector<std::pair<int, Eigen::Isometry3d>> placementsFromCorrections(
   return placements;
 }
 
-std::vector<std::pair<int, Eigen::Isometry3d>> placementsFromMapToOdom(
-    const Eigen::Isometry3d& T_map_odom, const std::vector<SubmapInfo>& submaps, double min_shift) {
-  std::vector<std::pair<int, Eigen::Isometry3d>> placements;
-  const auto active = std::find_if(submaps.begin(), submaps.end(),
-                                   [](const SubmapInfo& submap) { return submap.active; });
-  if (active == submaps.end()) return placements;
-  // Nothing written yet: measured over the last submap's blocks, else any change counts.
-  Eigen::AlignedBox3d reach = active->bounds;
-  for (auto it = submaps.rbegin(); reach.isEmpty() && it != submaps.rend(); ++it) {
-    reach = it->bounds;
-  }
-  const bool moved = reach.isEmpty() ? !T_map_odom.isApprox(active->written)
-                                     : largestShift(reach, active->written, active->written,
-                                                    T_map_odom) > min_shift;
-  if (!moved) return placements;
-  for (const SubmapInfo& submap : submaps) {
-    if (submap.fixed) continue;
-    if (submap.active ||
-        largestShift(submap.bounds, submap.written, submap.placed, active->written) <= min_shift) {
-      placements.emplace_back(submap.id, T_map_odom);
-    }
-  }
-  return placements;
-}
-
 }  // namespace occupancy_fusion

@@ -38,6 +38,7 @@
 #include "occupancy_fusion/map/saved_map.h"
 #include "occupancy_fusion/map/voxel_map.h"
 #include "occupancy_fusion/mapping/frames.h"
+#include "occupancy_fusion/mapping/map_reanchoring.h"
 #include "occupancy_fusion/params/laser_config_reader.h"
 #include "occupancy_fusion/params/parameter_source.h"
 
@@ -56,6 +57,8 @@ struct MappingSessionConfig {
   // `laser` and laser_max_tilt.
   std::vector<LaserSourceConfig> laser_sources;
   FusedGridConfig fused_grid;  // height band of the 2D view
+  // Submaps placed by the localisation's corrections (map_reanchoring.h); off by default.
+  ReanchoringConfig reanchoring;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
@@ -63,8 +66,8 @@ struct MappingSessionConfig {
 // frame_id, then the parameters of readVoxelMapConfig, readPointCloudIntegratorConfig,
 // readPyramidDepthConfig (depth/...), readVisibilityStereoConfig (stereo/...),
 // readPolarLaserIntegratorConfig under laser/ (and laser/max_tilt), readLaserSourceConfigs where
-// observation_sources is given, and readFusedGridConfig: the same keys the mapper nodelets and
-// map server read, so their YAML files can be merged.
+// observation_sources is given, readFusedGridConfig and readReanchoringConfig: the same keys the
+// mapper nodelets and map server read, so their YAML files can be merged.
 MappingSessionConfig readMappingSessionConfig(const ParameterSource& source);
 
 // A scan placed in the x-y plane of a frame in which the scanner's pose is T_frame_sensor: the
@@ -133,6 +136,15 @@ class MappingSession : public FrameConsumer {
 
   // Later frames take their poses from `poses` (when a run moves on to the next recording).
   void setPoseSource(const PoseSource* poses) { poses_ = poses; }
+  // With config.reanchoring enabled: a session with its own map reanchors it itself; one given
+  // its map is given the map's reanchoring here (shared by every session writing that map; must
+  // outlive the session). Frames that carry T_map_sensor are placed by it, not by odometry.
+  void setReanchoring(MapReanchoring* reanchoring) { reanchoring_ = reanchoring; }
+  MapReanchoring* reanchoring() { return reanchoring_; }
+  const MapReanchoring* reanchoring() const { return reanchoring_; }
+  // The SLAM system's optimised keyframes (reanchoring/source: path): every submap re-placed.
+  // Nothing without reanchoring by path.
+  SubmapMoveResult onPath(const std::vector<StampedPose>& path, double stamp);
 
   FrameOutcome integrate(const PointCloudFrame& frame);
   FrameOutcome integrate(const DepthImageFrame& frame);
@@ -184,8 +196,10 @@ class MappingSession : public FrameConsumer {
  private:
   // The frame's pose in the map frame (looked up for `sensor_frame`), or a drop: a duplicate
   // stamp, no pose, a pose that is not finite.
+  // With reanchoring, *lease holds the frame's submap until the caller's write is done.
   FrameOutcome place(const FrameHeader& header, const std::string& sensor_frame,
-                     Eigen::Isometry3d* map_T_sensor);
+                     Eigen::Isometry3d* map_T_sensor,
+                     std::optional<MapReanchoring::PlacedFrame>* lease);
   FrameOutcome drop(const FrameHeader& header, const char* why, const std::string& reason,
                     const std::string& detail);
   // Counts an integrated frame of `kind` that started at `start` and remembers its stamp.
@@ -197,7 +211,9 @@ class MappingSession : public FrameConsumer {
   std::ostream* warnings_;
   std::unique_ptr<VoxelMap> own_voxels_;
   std::unique_ptr<GridLayer2D> own_layer_;
-  std::unique_ptr<MapCheckpoints> checkpoints_;  // when the session owns the map and layer
+  std::unique_ptr<MapCheckpoints> checkpoints_;      // when the session owns the map and layer
+  std::unique_ptr<MapReanchoring> own_reanchoring_;  // the same, with reanchoring
+  MapReanchoring* reanchoring_ = nullptr;
   VoxelMap* voxels_;
   GridLayer2D* layer_;
   // Made on the first frame of their kind: a nodelet's session maps one kind only.

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <shared_mutex>
 #include <utility>
 #include <vector>
@@ -97,17 +98,23 @@ class SubmapFusion {
   FrameLease beginFrame(double stamp);
 
   // Closes the active submap (it keeps its placement) and starts the next one, written with
-  // T_map_odom. Returns the new submap's id. A submap that changed nothing is reused.
+  // T_map_odom (without: the active one's). Returns the new submap's id. A submap that changed
+  // nothing is reused.
   int startSubmap(const Eigen::Isometry3d& T_map_odom);
+  int startSubmap();
 
   // New placements (T_map_odom) by submap id; unknown ids are ignored. The active submap, when it
   // moves, is closed first and the next one is written with its new placement (with nothing
   // written yet, it is only placed anew).
-  SubmapMoveResult place(const std::vector<std::pair<int, Eigen::Isometry3d>>& placements);
+  // `next`: where the frames from now on are written (the newest correction), when given; the
+  // active submap is closed first if that moves it.
+  SubmapMoveResult place(const std::vector<std::pair<int, Eigen::Isometry3d>>& placements,
+                         const std::optional<Eigen::Isometry3d>& next = std::nullopt);
 
   std::vector<SubmapInfo> submaps() const;
   int activeSubmap() const;
   const SubmapFusionConfig& config() const { return config_; }
+  double minShift() const { return min_shift_; }  // m, config().min_shift or one voxel
   std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
 
   // Empties the map and layer and forgets every submap (the map server's reset).
@@ -124,7 +131,10 @@ class SubmapFusion {
   };
   using Placements = std::vector<std::pair<int, Eigen::Isometry3d>>;
 
-  void closeActiveLocked(const Eigen::Isometry3d& next_T_map_odom);
+  // By value: callers pass the active submap's own placement, which closing it replaces.
+  void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
+  // The active submap shown at `placed`; frames from now on written at `next`.
+  void placeActiveLocked(const Eigen::Isometry3d& placed, const Eigen::Isometry3d& next);
   Eigen::AlignedBox3d boundsOf(int id) const;
   Eigen::AlignedBox3d activeBounds() const;
   std::size_t activeBlocks() const;

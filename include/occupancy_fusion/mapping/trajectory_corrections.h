@@ -70,11 +70,4 @@ std::vector<StampedPose> correctionsAlongPath(const std::vector<StampedPose>& pa
 std::vector<std::pair<int, Eigen::Isometry3d>> placementsFromCorrections(
     const std::vector<StampedPose>& corrections, const std::vector<SubmapInfo>& submaps);
 
-// The placements that a new map -> odom (from tf, without a path) gives: the submaps still
-// placed as the active one is written (within min_shift: nothing moved them since the last
-// correction) take the new one, older submaps stay where they are. Empty when the new one moves
-// the active submap by at most min_shift.
-std::vector<std::pair<int, Eigen::Isometry3d>> placementsFromMapToOdom(
-    const Eigen::Isometry3d& T_map_odom, const std::vector<SubmapInfo>& submaps, double min_shift);
-
 }  // namespace occupancy_fusion

@@ -106,22 +106,5 @@ TEST(TrajectoryCorrections, SubmapsBeyondThePathTakeItsNearestCorrectionAndEmpty
   EXPECT_TRUE(placementsFromCorrections({}, {submap(1, 30.0, 40.0)}).empty());
 }
 
-TEST(TrajectoryCorrections, AMapToOdomJumpMovesTheSubmapsSinceTheLastJumpOnly) {
-  SubmapInfo old_one = submap(0, 1.0, 2.0), recent = submap(1, 2.0, 3.0), active = submap(2, 3, 4);
-  old_one.written = old_one.placed = planar(0.0, 0.0, 0.0);
-  recent.written = recent.placed = planar(0.5, 0.0, 0.0);
-  active.written = active.placed = planar(0.5, 0.0, 0.0);
-  active.active = true;
-  const auto placements =
-      placementsFromMapToOdom(planar(0.8, 0.1, 0.0), {old_one, recent, active}, 0.1);
-  ASSERT_EQ(placements.size(), 2u);
-  EXPECT_EQ(placements[0].first, 1);
-  EXPECT_EQ(placements[1].first, 2);
-  EXPECT_TRUE(placements[1].second.isApprox(planar(0.8, 0.1, 0.0)));
-  // Within the tolerance: nothing moves.
-  EXPECT_TRUE(
-      placementsFromMapToOdom(planar(0.55, 0.0, 0.0), {old_one, recent, active}, 0.1).empty());
-}
-
 }  // namespace
 }  // namespace occupancy_fusion

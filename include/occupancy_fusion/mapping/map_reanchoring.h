@@ -1,0 +1,112 @@
+// A map that follows its localisation's corrections (REP-105: map -> odom -> base_link): frames
+// are placed by odometry into submaps (submap_fusion.h), and the submaps are placed in the map by
+// the corrections, from one of
+//  - `tf`: map -> odom as tf gives it at each frame's stamp. A localisation publishes the
+//    correction that is right now; when it jumps (by more than min_shift), the jump is taken as
+//    right at its stamp, and the odometry's drift as grown evenly since the previous jump: each
+//    submap of that stretch is placed by the correction interpolated at its time (the same rule
+//    as a path of two keyframes, trajectory_corrections.h), older submaps stay. What AMCL,
+//    slam_toolbox and cartographer publish.
+//  - `path`: the SLAM system's optimised keyframes, T_map_base at their stamps (a nav_msgs/Path
+//    republished whenever the graph changes: LIO-SAM's mapping/path, RTAB-Map's mapPath), given
+//    to applyPath(); every submap is placed by the keyframes of its own time span
+//    (trajectory_corrections.h).
+// With map -> odom the identity and never changing, the map is the one mapped without submaps,
+// voxel for voxel. Thread safety: every public member function may be called from any thread
+// (several mappers share one map and its reanchoring).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/mapping/frames.h"
+#include "occupancy_fusion/mapping/submap_fusion.h"
+#include "occupancy_fusion/mapping/trajectory_corrections.h"
+#include "occupancy_fusion/params/parameter_source.h"
+
+namespace occupancy_fusion {
+
+struct ReanchoringConfig {
+  enum class Source { kNone, kTf, kPath };
+  // reanchoring/source: "none" (frames placed by map -> sensor; the map never moves), "tf" or
+  // "path" (above).
+  Source source = Source::kNone;
+  std::string odom_frame = "odom";       // reanchoring/odom_frame
+  std::string base_frame = "base_link";  // reanchoring/base_frame: the body the path's poses are of
+  // A new submap after the robot travelled this far (m) or this long (s, 0: no limit) since the
+  // active one began (reanchoring/submap_distance, reanchoring/submap_seconds).
+  double submap_distance = 4.0;
+  double submap_seconds = 60.0;
+  SubmapFusionConfig fusion;              // reanchoring/min_shift
+  TrajectoryCorrectionConfig trajectory;  // reanchoring/max_odometry_gap
+
+  bool enabled() const { return source != Source::kNone; }
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+// The reanchoring/... keys above; throws std::invalid_argument for a bad value.
+ReanchoringConfig readReanchoringConfig(const ParameterSource& source);
+const char* sourceName(ReanchoringConfig::Source source);
+
+// What the corrections did so far.
+struct ReanchoringStatistics {
+  std::size_t corrections = 0;       // paths and map -> odom jumps that moved a submap
+  std::size_t submaps_moved = 0;     // in all
+  std::size_t blocks_rewritten = 0;  // blocks and tiles of the fused map, in all
+  double last_correction_seconds = 0.0;
+  double last_correction_stamp = 0.0;  // s, the frame or path that brought it
+  std::size_t path_keyframes = 0;      // of the last path, and those matched with the odometry
+  std::size_t path_corrections = 0;
+  std::size_t map_to_odom_jumps = 0;  // tf's map -> odom changes beyond min_shift
+};
+
+class MapReanchoring {
+ public:
+  // Watches `map` and `layer` (layer may be null; both must outlive this).
+  MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config);
+
+  // A frame placed in the map: hold `lease` until its write is done.
+  struct PlacedFrame {
+    SubmapFusion::FrameLease lease;
+    Eigen::Isometry3d T_map_sensor;
+  };
+  // Places a frame of `sensor_frame` at `stamp` by the odometry (odom -> sensor_frame) and the
+  // active submap's placement; starts a new submap when the robot went far enough; with `tf`
+  // first follows map -> odom (map_frame -> odom_frame) at the stamp. nullopt, with the reason
+  // in *why, when a transform is missing.
+  std::optional<PlacedFrame> placeFrame(const PoseSource& poses, const std::string& map_frame,
+                                        const std::string& sensor_frame, double stamp,
+                                        std::string* why);
+  // The SLAM system's keyframes (T_map_base of base_frame), the whole optimised path.
+  SubmapMoveResult applyPath(const std::vector<StampedPose>& path, double stamp = 0.0);
+  // map -> odom at `stamp` (what placeFrame does with tf's; for callers that have it otherwise).
+  SubmapMoveResult applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp = 0.0);
+
+  const ReanchoringConfig& config() const { return config_; }
+  SubmapFusion& fusion() { return fusion_; }
+  const SubmapFusion& fusion() const { return fusion_; }
+  ReanchoringStatistics statistics() const;
+  std::size_t odometryPoses() const;
+  // Forgets the submaps, the odometry and empties the map (the map server's reset).
+  void reset();
+
+ private:
+  void countCorrection(const SubmapMoveResult& result, double stamp);
+  void startSubmapIfDue(const Eigen::Vector3d& position, double stamp);
+
+  ReanchoringConfig config_;
+  SubmapFusion fusion_;
+  mutable std::mutex mutex_;  // the odometry, the submap's start and the statistics
+  OdometryTrack odometry_;
+  std::vector<StampedPose> map_to_odom_;  // tf's map -> odom: the first, then at each jump
+  bool started_ = false;
+  Eigen::Vector3d submap_start_position_ = Eigen::Vector3d::Zero();
+  double submap_start_stamp_ = 0.0;
+  ReanchoringStatistics statistics_;
+};
+
+}  // namespace occupancy_fusion

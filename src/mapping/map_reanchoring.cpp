@@ -1,0 +1,186 @@
+#include "occupancy_fusion/mapping/map_reanchoring.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace occupancy_fusion {
+namespace {
+
+void requirePositive(double value, const char* name, bool zero_allowed) {
+  if (std::isfinite(value) && (value > 0.0 || (zero_allowed && value == 0.0))) return;
+  throw std::invalid_argument(std::string(name) +
+                              (zero_allowed ? " must be >= 0" : " must be > 0") + ", got " +
+                              std::to_string(value));
+}
+
+}  // namespace
+
+const char* sourceName(ReanchoringConfig::Source source) {
+  switch (source) {
+    case ReanchoringConfig::Source::kTf:
+      return "tf";
+    case ReanchoringConfig::Source::kPath:
+      return "path";
+    case ReanchoringConfig::Source::kNone:
+      break;
+  }
+  return "none";
+}
+
+void ReanchoringConfig::validate() const {
+  if (enabled() && (odom_frame.empty() || base_frame.empty())) {
+    throw std::invalid_argument("reanchoring/odom_frame and reanchoring/base_frame must be set");
+  }
+  requirePositive(submap_distance, "reanchoring/submap_distance (m)", false);
+  requirePositive(submap_seconds, "reanchoring/submap_seconds (s, 0: no limit)", true);
+  fusion.validate();
+  trajectory.validate();
+}
+
+ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
+  ReanchoringConfig config;
+  std::string name = sourceName(config.source);
+  source.get("reanchoring/source", &name);
+  if (name == "none") {
+    config.source = ReanchoringConfig::Source::kNone;
+  } else if (name == "tf") {
+    config.source = ReanchoringConfig::Source::kTf;
+  } else if (name == "path") {
+    config.source = ReanchoringConfig::Source::kPath;
+  } else {
+    throw std::invalid_argument("reanchoring/source must be none, tf or path, got '" + name + "'");
+  }
+  source.get("reanchoring/odom_frame", &config.odom_frame);
+  source.get("reanchoring/base_frame", &config.base_frame);
+  source.get("reanchoring/submap_distance", &config.submap_distance);
+  source.get("reanchoring/submap_seconds", &config.submap_seconds);
+  source.get("reanchoring/min_shift", &config.fusion.min_shift);
+  source.get("reanchoring/max_odometry_gap", &config.trajectory.max_odometry_gap);
+  config.validate();
+  return config;
+}
+
+MapReanchoring::MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config)
+    : config_(config), fusion_(map, layer, config.fusion) {
+  config_.validate();
+}
+
+std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
+    const PoseSource& poses, const std::string& map_frame, const std::string& sensor_frame,
+    double stamp, std::string* why) {
+  const std::optional<Eigen::Isometry3d> T_odom_sensor =
+      poses.lookup(config_.odom_frame, sensor_frame, stamp, why);
+  if (!T_odom_sensor) return std::nullopt;
+  std::string base_why;
+  const std::optional<Eigen::Isometry3d> T_odom_base =
+      poses.lookup(config_.odom_frame, config_.base_frame, stamp, &base_why);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (T_odom_base) odometry_.add(stamp, *T_odom_base);
+  }
+  startSubmapIfDue((T_odom_base ? *T_odom_base : *T_odom_sensor).translation(), stamp);
+  if (config_.source == ReanchoringConfig::Source::kTf) {
+    const std::optional<Eigen::Isometry3d> T_map_odom =
+        poses.lookup(map_frame, config_.odom_frame, stamp, why);
+    if (!T_map_odom) return std::nullopt;
+    applyMapToOdom(*T_map_odom, stamp);
+  }
+  PlacedFrame placed{fusion_.beginFrame(stamp), Eigen::Isometry3d::Identity()};
+  placed.T_map_sensor = placed.lease.T_map_odom() * *T_odom_sensor;
+  return placed;
+}
+
+void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double stamp) {
+  bool due = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!started_) {
+      started_ = true;
+      submap_start_position_ = position;
+      submap_start_stamp_ = stamp;
+      return;
+    }
+    due = (position - submap_start_position_).norm() > config_.submap_distance ||
+          (config_.submap_seconds > 0.0 && stamp - submap_start_stamp_ > config_.submap_seconds) ||
+          stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
+    if (due) {
+      submap_start_position_ = position;
+      submap_start_stamp_ = stamp;
+    }
+  }
+  if (due) fusion_.startSubmap();
+}
+
+SubmapMoveResult MapReanchoring::applyPath(const std::vector<StampedPose>& path, double stamp) {
+  std::vector<StampedPose> corrections;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    corrections = correctionsAlongPath(path, odometry_, config_.trajectory);
+    statistics_.path_keyframes = path.size();
+    statistics_.path_corrections = corrections.size();
+  }
+  if (corrections.empty()) return {};
+  const SubmapMoveResult result = fusion_.place(
+      placementsFromCorrections(corrections, fusion_.submaps()), corrections.back().pose);
+  countCorrection(result, stamp);
+  return result;
+}
+
+SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
+  std::vector<SubmapInfo> submaps = fusion_.submaps();
+  std::vector<StampedPose> corrections;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // A change is measured over the newest blocks: those of the active submap, or the last one's.
+    Eigen::AlignedBox3d reach;
+    for (auto it = submaps.rbegin(); reach.isEmpty() && it != submaps.rend(); ++it) {
+      reach = it->bounds;
+    }
+    const bool jump = map_to_odom_.empty() ||
+                      largestShift(reach, Eigen::Isometry3d::Identity(), map_to_odom_.back().pose,
+                                   T_map_odom) > fusion_.minShift() ||
+                      (reach.isEmpty() && !T_map_odom.isApprox(map_to_odom_.back().pose));
+    if (!jump) return {};
+    if (!map_to_odom_.empty()) ++statistics_.map_to_odom_jumps;
+    map_to_odom_.push_back({stamp, T_map_odom});
+    std::stable_sort(map_to_odom_.begin(), map_to_odom_.end(),
+                     [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+    corrections = map_to_odom_;
+  }
+  const SubmapMoveResult result =
+      fusion_.place(placementsFromCorrections(corrections, submaps), T_map_odom);
+  countCorrection(result, stamp);
+  return result;
+}
+
+void MapReanchoring::countCorrection(const SubmapMoveResult& result, double stamp) {
+  if (result.moved == 0) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++statistics_.corrections;
+  statistics_.submaps_moved += result.moved;
+  statistics_.blocks_rewritten += result.blocks_rewritten;
+  statistics_.last_correction_seconds = result.seconds;
+  statistics_.last_correction_stamp = stamp;
+}
+
+ReanchoringStatistics MapReanchoring::statistics() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return statistics_;
+}
+
+std::size_t MapReanchoring::odometryPoses() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return odometry_.size();
+}
+
+void MapReanchoring::reset() {
+  fusion_.reset();
+  std::lock_guard<std::mutex> lock(mutex_);
+  odometry_.clear();
+  map_to_odom_.clear();
+  started_ = false;
+  statistics_ = ReanchoringStatistics();
+}
+
+}  // namespace occupancy_fusion
