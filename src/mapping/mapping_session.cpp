@@ -255,11 +255,13 @@ FrameOutcome MappingSession::place(const FrameHeader& header, const std::string&
     }
   }
   std::string why;
-  std::optional<Eigen::Isometry3d> pose = header.T_map_sensor;
-  if (!pose && poses_ != nullptr && reanchoring_ != nullptr) {
+  std::optional<Eigen::Isometry3d> pose;
+  if (poses_ != nullptr && reanchoring_ != nullptr) {  // by odometry, whatever the frame carries
     *lease = reanchoring_->placeFrame(*poses_, config_.frame_id, sensor_frame, header.stamp, &why);
     if (*lease) pose = (*lease)->T_map_sensor;
-  } else if (!pose && poses_ != nullptr) {
+  } else if (header.T_map_sensor) {
+    pose = header.T_map_sensor;
+  } else if (poses_ != nullptr) {
     pose = poses_->lookup(config_.frame_id, sensor_frame, header.stamp, &why);
   }
   if (!pose) {

@@ -119,6 +119,14 @@ int SubmapFusion::startSubmap() {
   return active_.id;
 }
 
+void SubmapFusion::fixWrittenSoFar() {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (activeBlocks() == 0) return;
+  closeActiveLocked(active_.written);
+  closed_.back().fixed = true;
+}
+
 void SubmapFusion::closeActiveLocked(Eigen::Isometry3d next_T_map_odom) {
   stores_->forEach([](auto& store) { store.closeActive(); });
   {

@@ -2,7 +2,9 @@
 // resume a saved map at start (~load_map) and save the map when it is unloaded
 // (~save_on_shutdown), so that a restart loses nothing; with checkpoint_period and spill_folder
 // it checkpoints the map to its store that often (and once more when unloaded), and a map
-// created on that store resumed its last checkpoint.
+// created on that store resumed its last checkpoint. With reanchoring/source path it reads the
+// SLAM system's optimised keyframes (nav_msgs/Path on reanchoring/path_topic) and re-places the
+// map's submaps by them (mapping/map_reanchoring.h).
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -12,6 +14,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/map/saved_map.h"
+#include "occupancy_fusion/ros/keyframe_path.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
 #include "occupancy_fusion/ros/shared_map_access.h"
@@ -22,12 +25,15 @@ namespace occupancy_fusion {
 struct MapPersistenceConfig {
   std::string load_map;          // .ot (exact log-odds) or .bt (labels) file; empty: start empty
   std::string save_on_shutdown;  // path prefix; empty: no save when the nodelet is unloaded
+  // reanchoring/source path: the topic of the SLAM system's keyframes (nav_msgs/Path).
+  std::string path_topic = "slam/path";
 };
 
 MapPersistenceConfig readMapPersistenceConfig(const ParameterSource& source) {
   MapPersistenceConfig config;
   source.get("load_map", &config.load_map);
   source.get("save_on_shutdown", &config.save_on_shutdown);
+  source.get("reanchoring/path_topic", &config.path_topic);
   return config;
 }
 
@@ -59,6 +65,7 @@ class MapServer : public nodelet::Nodelet {
       persistence_ = readMapPersistenceConfig(parameters);
       std::shared_ptr<SharedMap> map = acquireSharedMap(parameters, getName());
       if (!persistence_.load_map.empty()) loadMap(persistence_.load_map, map.get());
+      startReanchoring(map.get());
       const MapPublisherConfig publisher_config = readMapPublisherConfig(parameters);
       grid_config_ = publisher_config.grid;
       publisher_ = std::make_unique<MapPublisher>(getNodeHandle(), getPrivateNodeHandle(),
@@ -105,6 +112,47 @@ class MapServer : public nodelet::Nodelet {
                  map->name().c_str(), path.c_str(), resumed.known_voxels, resumed.layer_cells);
   }
 
+  // A loaded map has no trajectory to follow: it stays where it is. With a path, its corrections.
+  void startReanchoring(SharedMap* map) {
+    MapReanchoring* reanchoring = map->reanchoring();
+    if (reanchoring == nullptr) return;
+    if (!persistence_.load_map.empty()) reanchoring->fusion().fixWrittenSoFar();
+    const ReanchoringConfig& config = reanchoring->config();
+    NODELET_INFO(
+        "map '%s' follows its localisation (reanchoring/source %s): frames placed by "
+        "%s, a submap every %.1f m",
+        map->name().c_str(), sourceName(config.source), config.odom_frame.c_str(),
+        config.submap_distance);
+    if (config.source != ReanchoringConfig::Source::kPath) return;
+    path_subscriber_ =
+        getNodeHandle().subscribe(persistence_.path_topic, 1, &MapServer::onPath, this);
+  }
+
+  void onPath(const nav_msgs::Path::ConstPtr& path) {
+    const auto strip = [](const std::string& frame) {
+      return frame.rfind('/', 0) == 0 ? frame.substr(1) : frame;
+    };
+    if (strip(path->header.frame_id) != strip(map_->frameId())) {
+      NODELET_WARN_THROTTLE(10.0, "path on '%s' is in frame '%s', not the map's '%s': ignored",
+                            path_subscriber_.getTopic().c_str(), path->header.frame_id.c_str(),
+                            map_->frameId().c_str());
+      return;
+    }
+    const SubmapMoveResult result =
+        map_->reanchoring()->applyPath(keyframesOf(*path), path->header.stamp.toSec());
+    const ReanchoringStatistics statistics = map_->reanchoring()->statistics();
+    if (statistics.path_corrections == 0 && !path->poses.empty()) {
+      NODELET_WARN_THROTTLE(10.0,
+                            "none of the path's %zu keyframes is within the odometry heard "
+                            "(reanchoring/base_frame '%s' in '%s'): no submap placed",
+                            path->poses.size(), map_->reanchoring()->config().base_frame.c_str(),
+                            map_->reanchoring()->config().odom_frame.c_str());
+    }
+    if (result.moved == 0) return;
+    NODELET_INFO("path of %zu keyframes: %zu submaps re-placed, %zu blocks rebuilt in %.0f ms",
+                 path->poses.size(), result.moved, result.blocks_rewritten, 1e3 * result.seconds);
+  }
+
   // checkpoint_period (a map parameter): the map's store keeps a checkpoint that often.
   void startCheckpoints() {
     const VoxelMap& voxels = map_->voxels();
@@ -149,6 +197,7 @@ class MapServer : public nodelet::Nodelet {
   FusedGridConfig grid_config_;
   std::shared_ptr<SharedMap> map_;
   std::unique_ptr<MapPublisher> publisher_;
+  ros::Subscriber path_subscriber_;
 };
 
 }  // namespace occupancy_fusion

@@ -14,6 +14,7 @@ void SharedMapConfig::validate() const {
   if (name.empty()) throw std::invalid_argument("map_name must not be empty");
   if (frame_id.empty()) throw std::invalid_argument("frame_id must not be empty");
   voxels.validate();
+  reanchoring.validate();
 }
 
 SharedMapConfig readSharedMapConfig(const ParameterSource& source) {
@@ -21,6 +22,7 @@ SharedMapConfig readSharedMapConfig(const ParameterSource& source) {
   source.get("map_name", &config.name);
   source.get("frame_id", &config.frame_id);
   config.voxels = readVoxelMapConfig(source);
+  config.reanchoring = readReanchoringConfig(source);
   config.validate();
   return config;
 }
@@ -29,13 +31,20 @@ SharedMap::SharedMap(const SharedMapConfig& config)
     : config_(config),
       voxels_(config.voxels),
       layer_(config.layer()),
-      checkpoints_(&voxels_, &layer_) {}
+      checkpoints_(&voxels_, &layer_),
+      reanchoring_(config.reanchoring.enabled()
+                       ? std::make_unique<MapReanchoring>(&voxels_, &layer_, config.reanchoring)
+                       : nullptr) {}
 
 void SharedMap::reset() {
   {
     // Forgotten first: a frame noted after this is written after the reset too.
     const std::lock_guard<std::mutex> lock(integrated_mutex_);
     integrated_.clear();
+  }
+  if (reanchoring_) {
+    reanchoring_->reset();
+    return;
   }
   voxels_.reset();
   layer_.reset();

@@ -31,11 +31,17 @@ void MapperNodeletBase::setUpMapper(
   }
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, getNodeHandle());
+  if (session_ && map_->reanchoring() != nullptr) {
+    pose_source_ = std::make_unique<TfBufferPoseSource>(*tf_buffer_);
+    session_->setPoseSource(pose_source_.get());
+    session_->setReanchoring(map_->reanchoring());
+  }
 }
 
 void MapperNodeletBase::startSession(MappingSessionConfig config) {
   config.frame_id = map_->frameId();
   config.map = map_->config().voxels;
+  config.reanchoring = map_->config().reanchoring;
   session_ =
       std::make_unique<MappingSession>(config, &map_->voxels(), &map_->layer(), nullptr, nullptr);
 }

@@ -2,9 +2,10 @@
 // integrated into one VoxelMap (point clouds, depth images, disparity images) and one GridLayer2D
 // (laser scans) by the rules the nodelets and offline_mapper share, so that a recording mapped
 // offline gives the map the nodelets build from it live:
-//  - pose: the frame's own T_map_sensor (a recording's poses, or what a nodelet looked up in tf at
-//    the frame's exact stamp), else the PoseSource's pose of frame_id at the stamp; a pose that is
-//    not finite is dropped;
+//  - pose: with reanchoring (map_reanchoring.h) and a PoseSource, the odometry's pose of the
+//    sensor placed by the active submap; else the frame's own T_map_sensor (a recording's poses,
+//    or what a nodelet looked up in tf at the frame's exact stamp), else the PoseSource's pose of
+//    frame_id at the stamp; a pose that is not finite is dropped;
 //  - duplicate stamps: a frame stamped exactly like the last one integrated of the same sensor
 //    kind and header frame_id (a republished or duplicated message) is dropped, since integrating
 //    it would count the same evidence twice. The key is the sensor's frame, not the topic: a
@@ -138,7 +139,8 @@ class MappingSession : public FrameConsumer {
   void setPoseSource(const PoseSource* poses) { poses_ = poses; }
   // With config.reanchoring enabled: a session with its own map reanchors it itself; one given
   // its map is given the map's reanchoring here (shared by every session writing that map; must
-  // outlive the session). Frames that carry T_map_sensor are placed by it, not by odometry.
+  // outlive the session). With a PoseSource every frame is placed by odometry through it (what a
+  // frame's T_map_sensor says is not used); without one, frames keep the pose they carry.
   void setReanchoring(MapReanchoring* reanchoring) { reanchoring_ = reanchoring; }
   MapReanchoring* reanchoring() { return reanchoring_; }
   const MapReanchoring* reanchoring() const { return reanchoring_; }

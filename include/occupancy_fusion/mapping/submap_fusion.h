@@ -102,6 +102,8 @@ class SubmapFusion {
   // nothing is reused.
   int startSubmap(const Eigen::Isometry3d& T_map_odom);
   int startSubmap();
+  // What the map holds so far (e.g. a saved map just loaded) becomes a fixed submap, never moved.
+  void fixWrittenSoFar();
 
   // New placements (T_map_odom) by submap id; unknown ids are ignored. The active submap, when it
   // moves, is closed first and the next one is written with its new placement (with nothing

@@ -17,14 +17,16 @@
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/map_checkpoints.h"
 #include "occupancy_fusion/map/voxel_map.h"
+#include "occupancy_fusion/mapping/map_reanchoring.h"
 #include "occupancy_fusion/params/parameter_source.h"
 
 namespace occupancy_fusion {
 
 struct SharedMapConfig {
-  std::string name = "map";      // registry key (parameter map_name)
-  std::string frame_id = "map";  // frame the map is expressed in (parameter frame_id)
-  VoxelMapConfig voxels;         // resolution, sensor_model/*, max_memory_mb
+  std::string name = "map";       // registry key (parameter map_name)
+  std::string frame_id = "map";   // frame the map is expressed in (parameter frame_id)
+  VoxelMapConfig voxels;          // resolution, sensor_model/*, max_memory_mb
+  ReanchoringConfig reanchoring;  // reanchoring/*: submaps placed by the localisation
   // The 2D layer shares the 3D map's resolution and sensor model, so that the fused view
   // combines cells of the same size.
   GridLayer2DConfig layer() const;
@@ -32,7 +34,7 @@ struct SharedMapConfig {
   void validate() const;  // throws std::invalid_argument naming the bad parameter
 };
 
-// map_name, frame_id, and everything readVoxelMapConfig reads.
+// map_name, frame_id, and everything readVoxelMapConfig and readReanchoringConfig read.
 SharedMapConfig readSharedMapConfig(const ParameterSource& source);
 
 // The 3D voxel map and the 2D laser layer of one map, and a log of the frames integrated into
@@ -48,8 +50,12 @@ class SharedMap {
   const VoxelMap& voxels() const { return voxels_; }
   GridLayer2D& layer() { return layer_; }
   const GridLayer2D& layer() const { return layer_; }
+  // The submaps and their corrections (nullptr: reanchoring/source none). Every mapper's session
+  // places its frames through it.
+  MapReanchoring* reanchoring() { return reanchoring_.get(); }
+  const MapReanchoring* reanchoring() const { return reanchoring_.get(); }
 
-  void reset();  // forgets everything: all voxels and cells unknown again
+  void reset();  // forgets everything: all voxels and cells unknown again, and the submaps
   // A checkpoint of the voxels and the laser layer to the map's store (checkpoint_period).
   CheckpointResult checkpoint(const std::string& stamp) { return checkpoints_.checkpoint(stamp); }
   std::size_t resumedLayerTiles() const { return checkpoints_.resumedTiles(); }
@@ -72,6 +78,8 @@ class SharedMap {
   VoxelMap voxels_;
   GridLayer2D layer_;
   MapCheckpoints checkpoints_;  // after voxels_ and layer_: restores the layer's resumed tiles
+  // After checkpoints_: what a checkpoint resumed is the map's fixed part, never moved.
+  std::unique_ptr<MapReanchoring> reanchoring_;
   mutable std::mutex integrated_mutex_;
   std::deque<IntegratedFrame> integrated_;  // the last kIntegratedLogSize frames noted
   std::uint64_t integrated_count_ = 0;

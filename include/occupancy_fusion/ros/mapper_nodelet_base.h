@@ -34,6 +34,7 @@
 #include "occupancy_fusion/params/parameter_source.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/map_registry.h"
+#include "occupancy_fusion/ros/tf_buffer_pose_source.h"
 
 namespace occupancy_fusion {
 
@@ -177,6 +178,8 @@ class MapperNodeletBase : public nodelet::Nodelet {
   // Outlives the derived mappers' message filters, which unregister from it when they go.
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  // With reanchoring: the session looks up the odometry and map -> odom itself, here.
+  std::unique_ptr<TfBufferPoseSource> pose_source_;
   FrameStatistics frames_;
   // The nodelet's callbacks run on its one-threaded queue; the lock keeps the session safe should
   // a mapper ever take a multi-threaded one.

@@ -227,6 +227,20 @@ TEST(SubmapFusion, WhatTheMapHeldBeforeStaysWhereItIs) {
   EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(56, 5, 5)), 0.5f);
 }
 
+TEST(SubmapFusion, WhatWasWrittenBeforeItIsFixedStaysWhereItIs) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
+  map.updateVoxel(VoxelIndex(5, 5, 5), 2.0f);  // a saved map loaded after the fusion began
+  fusion.fixWrittenSoFar();
+  map.updateVoxel(VoxelIndex(6, 5, 5), 0.5f);
+  fusion.startSubmap();
+  const Eigen::Isometry3d away(Eigen::Translation3d(5.0, 0, 0));
+  EXPECT_EQ(fusion.place({{0, away}, {1, away}}).moved, 1u);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(5, 5, 5)), 2.0f);
+  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(56, 5, 5)), 0.5f);
+  EXPECT_TRUE(fusion.submaps()[0].fixed);
+}
+
 TEST(SubmapFusion, ResetForgetsTheSubmaps) {
   VoxelMap map(mapConfig());
   SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
