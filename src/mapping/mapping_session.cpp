@@ -207,6 +207,12 @@ FrameOutcome MappingSession::integrate(const LaserScanFrame& frame) {
   return integrated(frame.header, frame.scan.ranges.size(), start);
 }
 
+ResumedMap MappingSession::resumeFrom(const std::string& path) {
+  ResumedMap resumed = resumeSavedMap(path, voxels_, layer_);
+  if (reanchoring_ != nullptr) reanchoring_->fusion().fixWrittenSoFar();
+  return resumed;
+}
+
 void MappingSession::onUnreadable(const FrameHeader& header, const std::string& why) {
   drop(header, kDropUnreadable, "unreadable message on " + header.source, why);
 }

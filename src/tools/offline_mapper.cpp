@@ -62,6 +62,8 @@ topic counts when its first message is 16UC1, mono16 or 32FC1):
   --depth-topic TOPIC      sensor_msgs/Image (16UC1 mm or 32FC1 m) with .../camera_info beside it
   --disparity-topic TOPIC  stereo_msgs/DisparityImage with .../camera_info or .../left/camera_info
   --scan-topic TOPIC       sensor_msgs/LaserScan
+  --path-topic TOPIC       nav_msgs/Path of a SLAM system's keyframes, for the map to follow
+                           (with the parameter reanchoring/source: path; never chosen by default)
 Parameters and output:
   --config FILE        YAML parameters, as loaded by rosparam into a mapper nodelet; repeat
                        to merge several files as successive rosparam loads (later ones win),
@@ -126,6 +128,7 @@ Options parseOptions(const CommandLine& line) {
   options.topics.depth_images = line.values("depth-topic");
   options.topics.disparity_images = line.values("disparity-topic");
   options.topics.scans = line.values("scan-topic");
+  options.topics.paths = line.values("path-topic");
   options.depth_folders = line.values("depth-folder");
   options.middlebury_folders = line.values("middlebury-folder");
   options.carmen_logs = line.values("carmen");
@@ -297,6 +300,15 @@ void printSummary(const std::vector<std::unique_ptr<InputReader>>& readers,
        << std::setprecision(3) << mapper.map().resolution() << " m, " << std::setprecision(1)
        << (mapper.map().memoryBytes() + mapper.laserLayer().memoryBytes()) / (1024.0 * 1024.0)
        << " MiB map memory, " << peakResidentMebibytes() << " MiB peak resident\n";
+  if (const MapReanchoring* reanchoring = mapper.reanchoring()) {
+    const ReanchoringStatistics corrections = reanchoring->statistics();
+    text << "  reanchoring (" << sourceName(reanchoring->config().source)
+         << "): " << reanchoring->fusion().submaps().size() << " submaps, "
+         << corrections.corrections << " corrections moved " << corrections.submaps_moved
+         << " submaps and rebuilt " << corrections.blocks_rewritten << " blocks, "
+         << std::setprecision(1) << reanchoring->fusion().memoryBytes() / (1024.0 * 1024.0)
+         << " MiB of submaps\n";
+  }
   const SpillStatus spill = mapper.map().spillStatus();
   if (spill.enabled) {
     const TileSpillStatus tiles = mapper.laserLayer().spillStatus();
@@ -339,6 +351,9 @@ class ScanPicker : public FrameConsumer {
   }
   void onUnreadable(const FrameHeader& header, const std::string& why) override {
     next_->onUnreadable(header, why);
+  }
+  void onTrajectory(const std::vector<StampedPose>& keyframes, double stamp) override {
+    next_->onTrajectory(keyframes, stamp);
   }
 
   int scansSeen() const { return scans_seen_; }
@@ -397,8 +412,8 @@ Setup prepare(int argc, char** argv) {
   const CommandLine line(
       argc, argv,
       {"config", "namespace", "set", "bag", "cloud-topic", "depth-topic", "disparity-topic",
-       "scan-topic", "depth-folder", "middlebury-folder", "carmen", "carmen-max-scans",
-       "single-scan", "output-dir", "name", "voxel-picture-max-z", "load-map"},
+       "scan-topic", "path-topic", "depth-folder", "middlebury-folder", "carmen",
+       "carmen-max-scans", "single-scan", "output-dir", "name", "voxel-picture-max-z", "load-map"},
       {"quiet", "help"});
   Setup setup;
   setup.options = parseOptions(line);

@@ -72,6 +72,12 @@ struct LaserScanFrame {
   LaserScan scan;
 };
 
+// A pose at a time: a SLAM system's keyframe (T_map_base at its stamp), an odometry pose.
+struct StampedPose {
+  double stamp = 0.0;  // s
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+};
+
 // Receives the frames of a recording, one callback per sensor kind.
 class FrameConsumer {
  public:
@@ -82,6 +88,9 @@ class FrameConsumer {
   virtual void onLaserScan(const LaserScanFrame& frame) = 0;
   // A message that could not be decoded (e.g. a cloud without x/y/z): counted, not fatal.
   virtual void onUnreadable(const FrameHeader& header, const std::string& why) = 0;
+  // A SLAM system's optimised keyframes, published at `stamp` (a nav_msgs/Path): the map's
+  // reanchoring reads them; other consumers need not.
+  virtual void onTrajectory(const std::vector<StampedPose>& /*keyframes*/, double /*stamp*/) {}
 };
 
 // Where sensor poses come from (tf in a bag, odometry in a log, a poses file beside images).

@@ -159,6 +159,9 @@ class MappingSession : public FrameConsumer {
   void onDisparityImage(const DisparityFrame& frame) override { integrate(frame); }
   void onLaserScan(const LaserScanFrame& frame) override { integrate(frame); }
   void onUnreadable(const FrameHeader& header, const std::string& why) override;
+  void onTrajectory(const std::vector<StampedPose>& keyframes, double stamp) override {
+    onPath(keyframes, stamp);
+  }
 
   // The laser source a scan's header belongs to (nullptr: the default `laser` settings), the
   // sensor frame its pose is looked up for (the source's sensor_frame, else the header's) and its
@@ -193,7 +196,8 @@ class MappingSession : public FrameConsumer {
 
   // Starts from a saved map (a .ot or .bt and the laser layer files beside it; see saved_map.h),
   // before the first frame. Throws std::runtime_error naming the file and what is wrong.
-  ResumedMap resumeFrom(const std::string& path) { return resumeSavedMap(path, voxels_, layer_); }
+  // With reanchoring the resumed map is fixed where it is (it has no trajectory to follow).
+  ResumedMap resumeFrom(const std::string& path);
 
  private:
   // The frame's pose in the map frame (looked up for `sensor_frame`), or a drop: a duplicate

@@ -16,14 +16,10 @@
 #include <utility>
 #include <vector>
 
+#include "occupancy_fusion/mapping/frames.h"
 #include "occupancy_fusion/mapping/submap_fusion.h"
 
 namespace occupancy_fusion {
-
-struct StampedPose {
-  double stamp = 0.0;  // s
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-};
 
 // Between two poses: translation linear, rotation by slerp; t in [0, 1].
 Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double t);

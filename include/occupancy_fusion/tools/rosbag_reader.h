@@ -60,6 +60,8 @@ struct RosbagTopics {
   std::vector<std::string> depth_images;      // sensor_msgs/Image, 16UC1 / mono16 mm or 32FC1 m
   std::vector<std::string> disparity_images;  // stereo_msgs/DisparityImage
   std::vector<std::string> scans;             // sensor_msgs/LaserScan
+  // nav_msgs/Path: a SLAM system's keyframes, for the map's reanchoring (never chosen by default)
+  std::vector<std::string> paths;
 
   bool empty() const {
     return clouds.empty() && depth_images.empty() && disparity_images.empty() && scans.empty();

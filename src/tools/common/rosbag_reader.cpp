@@ -18,6 +18,7 @@
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/depth_messages.h"
 #include "occupancy_fusion/ros/disparity_messages.h"
+#include "occupancy_fusion/ros/keyframe_path.h"
 #include "occupancy_fusion/tools/ros_conversions.h"
 
 namespace occupancy_fusion {
@@ -27,6 +28,7 @@ constexpr const char* kPointCloud2Type = "sensor_msgs/PointCloud2";
 constexpr const char* kImageType = "sensor_msgs/Image";
 constexpr const char* kDisparityType = "stereo_msgs/DisparityImage";
 constexpr const char* kLaserScanType = "sensor_msgs/LaserScan";
+constexpr const char* kPathType = "nav_msgs/Path";
 
 // Topic name -> message type, for every connection in the bags.
 std::map<std::string, std::string> topicTypes(const std::vector<const rosbag::Bag*>& bags) {
@@ -198,6 +200,11 @@ void RosbagReader::open(const std::vector<std::string>& paths, const RosbagTopic
   check(topics.depth_images, kImageType, available.depth_images);
   check(topics.disparity_images, kDisparityType, available.disparity_images);
   check(topics.scans, kLaserScanType, available.scans);
+  std::vector<std::string> path_topics;
+  for (const auto& [topic, type] : types) {
+    if (type == kPathType) path_topics.push_back(topic);
+  }
+  check(topics.paths, kPathType, path_topics);
   if (!topics.empty()) {
     topics_ = topics;
   } else if (clouds_only) {
@@ -205,6 +212,7 @@ void RosbagReader::open(const std::vector<std::string>& paths, const RosbagTopic
   } else {
     topics_ = available;
   }
+  topics_.paths = topics.paths;
   if (topics_.empty()) {
     throw std::invalid_argument(where + " holds no " +
                                 (clouds_only ? std::string("sensor_msgs/PointCloud2")
@@ -372,13 +380,17 @@ void RosbagReader::deliver(const rosbag::MessageInstance& message, FrameConsumer
       return;
     }
     consumer->onLaserScan(frame);
+  } else if (contains(topics_.paths, topic)) {
+    const nav_msgs::Path::ConstPtr path = message.instantiate<nav_msgs::Path>();
+    if (path) consumer->onTrajectory(keyframesOf(*path), path->header.stamp.toSec());
   }
 }
 
 void RosbagReader::read(FrameConsumer* consumer,
                         const std::function<void(std::size_t)>& after_frame) {
   std::vector<std::string> sensor_topics = topics_.clouds;
-  for (const auto* list : {&topics_.depth_images, &topics_.disparity_images, &topics_.scans}) {
+  for (const auto* list :
+       {&topics_.depth_images, &topics_.disparity_images, &topics_.scans, &topics_.paths}) {
     sensor_topics.insert(sensor_topics.end(), list->begin(), list->end());
   }
   // A View over several bags and topics yields their messages merged in bag time order.
@@ -401,6 +413,7 @@ void RosbagReader::read(FrameConsumer* consumer,
     } else {
       deliver(message, consumer);
     }
+    if (contains(topics_.paths, message.getTopic())) continue;  // not a frame
     if (after_frame) after_frame(++delivered);
   }
 }
