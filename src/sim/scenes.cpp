@@ -1,12 +1,17 @@
 #include "occupancy_fusion/sim/scenes.h"
 
 #include <cmath>
+#include <initializer_list>
+
+#include "occupancy_fusion/sim/trajectory.h"
 
 namespace occupancy_fusion {
 namespace sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// The building loop's turns: arcs of 1 m radius pass 1 m from the corridor's inner corner.
+constexpr double kLoopCornerRadius = 1.0;  // m
 
 Box aabb(double x0, double y0, double z0, double x1, double y1, double z1) {
   return Box::axisAligned({x0, y0, z0}, {x1, y1, z1});
@@ -45,6 +50,52 @@ void addChair(Scene* scene, double x, double y) {
       scene->add(aabb(lx, ly, 0.0, lx + kLeg, ly + kLeg, kSeat));
     }
   }
+}
+
+// A wall 2.5 m high over the footprint [x0, x1] x [y0, y1], running along its longer side, with
+// a 1 m doorway (full height: there is no ceiling) centred at each of `doors` (ascending
+// positions along it).
+void addWall(Scene* scene, double x0, double y0, double x1, double y1,
+             std::initializer_list<double> doors = {}) {
+  constexpr double kHeight = 2.5, kHalfDoor = 0.5;
+  const bool along_x = x1 - x0 >= y1 - y0;
+  auto piece = [&](double from, double to) {
+    if (to > from)
+      scene->add(along_x ? aabb(from, y0, 0, to, y1, kHeight) : aabb(x0, from, 0, x1, to, kHeight));
+  };
+  double from = along_x ? x0 : y0;
+  for (double door : doors) {
+    piece(from, door - kHalfDoor);
+    from = door + kHalfDoor;
+  }
+  piece(from, along_x ? x1 : y1);
+}
+
+// The building floor's walls: exterior, the corridor ring's two sides, the rooms' partitions.
+void addBuildingWalls(Scene* scene) {
+  addWall(scene, -20, -12.5, 20, -12.3);
+  addWall(scene, -20, 12.3, 20, 12.5);
+  addWall(scene, -20, -12.3, -19.8, 12.3);
+  addWall(scene, 19.8, -12.3, 20, 12.3);
+  // The corridor's outer side; its west and east walls run on to the exterior walls.
+  addWall(scene, -16, -8.65, 16, -8.5, {-11, -1, 10});
+  addWall(scene, -16, 8.5, 16, 8.65, {-12, -3, 4.5, 12.5});
+  addWall(scene, -16.15, -12.3, -16, 12.3, {2});
+  addWall(scene, 16, -12.3, 16.15, 12.3, {-4, 4.5});
+  // Its inner side: the central block.
+  addWall(scene, -14, -6.5, 14, -6.35, {-10, -2, 10});
+  addWall(scene, -14, 6.35, 14, 6.5, {-9, 2, 9});
+  addWall(scene, -14, -6.35, -13.85, 6.35, {3.5});
+  addWall(scene, 13.85, -6.35, 14, 6.35, {-3});
+  // Rooms: the central block's spine and partitions, then the outer rooms'.
+  addWall(scene, -13.85, -0.075, 13.85, 0.075, {-9.5});
+  for (double x : {-5.0, 5.0}) {
+    addWall(scene, x - 0.075, 0.075, x + 0.075, 6.35);
+    addWall(scene, x - 0.075, -6.35, x + 0.075, -0.075);
+  }
+  for (double x : {-8.0, 0.0, 8.0}) addWall(scene, x - 0.075, 8.65, x + 0.075, 12.3);
+  addWall(scene, 3.925, -12.3, 4.075, -8.65);
+  addWall(scene, 16.15, -0.075, 19.8, 0.075);
 }
 
 }  // namespace
@@ -147,6 +198,54 @@ Scene makeOfficeScene() {
       .add(Cylinder::upright(0.5, -3.0, 0.0, 0.2, 2.6))  // column
       .add(aabb(-2.5, 3.5, 0.0, -1.5, 3.9, 1.0));        // cabinet
   return scene;
+}
+
+Scene makeBuildingFloorScene() {
+  Scene scene;
+  scene.add(floorAtZero());
+  addBuildingWalls(&scene);
+  // The corridor: pillars, cabinets and low boxes against its walls, clear of the centre line.
+  scene.add(Cylinder::upright(-6.0, -8.3, 0.0, 0.15, 2.5))
+      .add(Cylinder::upright(14.2, 2.0, 0.0, 0.15, 2.5))
+      .add(Cylinder::upright(6.0, 8.3, 0.0, 0.15, 2.5))
+      .add(aabb(4.0, -6.85, 0.0, 4.8, -6.5, 1.8))
+      .add(aabb(-1.0, 6.5, 0.0, -0.2, 6.85, 1.8))
+      .add(aabb(-16.0, -3.0, 0.0, -15.65, -2.2, 1.8))
+      .add(aabb(15.65, -1.5, 0.0, 16.0, -0.9, 0.5))
+      .add(aabb(-6.0, 8.15, 0.0, -5.5, 8.5, 0.4))
+      .add(aabb(-14.35, -5.0, 0.0, -14.0, -3.8, 0.45));
+  // The central rooms.
+  scene
+      .add(aabb(-10.3, 2.5, 0.0, -8.7, 3.4, 0.75))  // table
+      .add(Cylinder::upright(0.0, 3.2, 0.0, 0.3, 2.5))
+      .add(Sphere{Eigen::Vector3d(-2.5, 4.8, 0.4), 0.4})
+      .add(aabb(8.0, 0.075, 0.0, 11.0, 0.575, 2.0))  // shelves on the spine
+      .add(Box::yawed(Eigen::Vector3d(-9.0, -3.5, 0.4), Eigen::Vector3d(0.8, 0.8, 0.8), 0.4))
+      .add(aabb(12.8, -4.5, 0.0, 13.85, -3.7, 1.8));  // cabinet
+  addDesk(&scene, -1.0, -4.2, 0.6, -3.4);
+  // The outer rooms.
+  addDesk(&scene, -14.0, 10.5, -12.4, 11.3);
+  scene.add(aabb(14.0, 11.8, 0.0, 15.5, 12.3, 2.0));  // cabinet
+  for (double x : {-12.0, -6.0, 0.0}) scene.add(Cylinder::upright(x, -10.5, 0.0, 0.2, 2.5));
+  scene.add(Box::yawed(Eigen::Vector3d(2.0, -11.2, 0.5), Eigen::Vector3d(1.2, 0.8, 1.0), 0.3))
+      .add(aabb(12.0, -12.3, 0.0, 14.0, -11.7, 1.2))       // counter
+      .add(Cylinder::upright(-18.0, -5.0, 0.0, 0.4, 1.0))  // barrel
+      .add(aabb(-19.8, 6.0, 0.0, -19.2, 9.0, 1.5))
+      .add(Sphere{Eigen::Vector3d(18.0, -8.0, 0.5), 0.5})
+      .add(aabb(17.5, 8.0, 0.0, 18.5, 9.0, 0.9));
+  return scene;
+}
+
+Eigen::AlignedBox2d buildingLoopCentreLine() {
+  return Eigen::AlignedBox2d(Eigen::Vector2d(-15.0, -7.5), Eigen::Vector2d(15.0, 7.5));
+}
+
+std::vector<Eigen::Isometry3d> buildingLoopPath(double step_m, double laps) {
+  return roundedRectanglePath(buildingLoopCentreLine(), kLoopCornerRadius, 0.0, step_m, laps);
+}
+
+double buildingLoopLength() {
+  return roundedRectangleLength(buildingLoopCentreLine(), kLoopCornerRadius);
 }
 
 }  // namespace sim

@@ -97,5 +97,82 @@ std::vector<Eigen::Isometry3d> straightLinePath(const Eigen::Vector3d& start,
   return poses;
 }
 
+namespace {
+
+// One piece of a rounded rectangle: a straight, or a left-turning arc of `radius`, entered at
+// `start` with heading `yaw`.
+struct LoopPiece {
+  Eigen::Vector2d start;
+  double yaw;
+  double length;
+  double radius;  // 0: straight
+
+  Eigen::Vector2d positionAt(double d) const {
+    if (radius == 0.0) return start + d * Eigen::Vector2d(std::cos(yaw), std::sin(yaw));
+    const Eigen::Vector2d center = start + radius * Eigen::Vector2d(-std::sin(yaw), std::cos(yaw));
+    const double angle = yaw + d / radius;
+    return center + radius * Eigen::Vector2d(std::sin(angle), -std::cos(angle));
+  }
+  double yawAt(double d) const { return radius == 0.0 ? yaw : yaw + d / radius; }
+};
+
+// The pieces counter-clockwise from the bottom side's left end: straight, arc, per side.
+std::vector<LoopPiece> roundedRectanglePieces(const Eigen::AlignedBox2d& rectangle, double radius) {
+  const Eigen::Vector2d size = rectangle.sizes();
+  if (!(radius > 0.0) || !(2.0 * radius <= size.minCoeff())) {
+    throw std::invalid_argument(
+        "roundedRectanglePath corner_radius must be > 0 and at most half the shorter side");
+  }
+  std::vector<LoopPiece> pieces;
+  Eigen::Vector2d at(rectangle.min().x() + radius, rectangle.min().y());
+  for (int side = 0; side < 4; ++side) {
+    const double yaw = side * kPi / 2;
+    pieces.push_back({at, yaw, size[side % 2] - 2.0 * radius, 0.0});
+    pieces.push_back(
+        {pieces.back().positionAt(pieces.back().length), yaw, kPi / 2 * radius, radius});
+    at = pieces.back().positionAt(pieces.back().length);
+  }
+  return pieces;
+}
+
+}  // namespace
+
+double roundedRectangleLength(const Eigen::AlignedBox2d& rectangle, double corner_radius) {
+  double length = 0.0;
+  for (const LoopPiece& piece : roundedRectanglePieces(rectangle, corner_radius)) {
+    length += piece.length;
+  }
+  return length;
+}
+
+std::vector<Eigen::Isometry3d> roundedRectanglePath(const Eigen::AlignedBox2d& rectangle,
+                                                    double corner_radius, double start_x,
+                                                    double step_m, double laps) {
+  const std::vector<LoopPiece> pieces = roundedRectanglePieces(rectangle, corner_radius);
+  if (!(step_m > 0.0)) throw std::invalid_argument("roundedRectanglePath step_m must be > 0");
+  if (!(laps >= 0.0) || !std::isfinite(laps)) {
+    throw std::invalid_argument("roundedRectanglePath laps must be >= 0");
+  }
+  const double offset = start_x - pieces.front().start.x();
+  if (!(offset >= 0.0 && offset <= pieces.front().length)) {
+    throw std::invalid_argument(
+        "roundedRectanglePath start_x must lie on the straight part of the bottom side");
+  }
+  const double length = roundedRectangleLength(rectangle, corner_radius);
+  const auto count = static_cast<long>(std::floor(laps * length / step_m + 1e-9)) + 1;
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(count);
+  for (long k = 0; k < count; ++k) {
+    double d = std::fmod(offset + k * step_m, length);
+    std::size_t i = 0;
+    while (i + 1 < pieces.size() && d > pieces[i].length) d -= pieces[i++].length;
+    const Eigen::Vector2d position = pieces[i].positionAt(d);
+    poses.push_back(
+        poseAt(Eigen::Vector3d(position.x(), position.y(), 0.0),
+               Eigen::AngleAxisd(pieces[i].yawAt(d), Eigen::Vector3d::UnitZ()).toRotationMatrix()));
+  }
+  return poses;
+}
+
 }  // namespace sim
 }  // namespace occupancy_fusion

@@ -30,9 +30,21 @@ playback, as a recorded static_transform_publisher). Sensors:
              /scan_rear (frame laser_rear, facing backward, mounted upside down)
 
   --output FILE   the bag to write (overwritten)
-  --scene NAME    room (default), corridor, box or spheres
-  --frames N      number of frames (default 60)
+  --scene NAME    room (default), corridor, box, spheres or building (a 40 x 25 m floor: the robot
+                  drives its 88 m corridor loop, counter-clockwise from the south corridor)
+  --frames N      number of frames (default 60; building: the whole loop path, or its first N)
   --rate HZ       frames per second (default 5)
+  --step M        building: metres between frames (default 0.2)
+  --laps L        building: laps of the loop (default 1.25: back at the start once, then on)
+  --drift SEED    drifting odometry (seeded) and a graph-SLAM stand-in: odom -> base_link is the
+                  odometry (about 0.5 m and 4 deg off after a lap), map -> odom the stand-in's,
+                  which corrects the past at loop closures (the robot within 1.5 m of a keyframe
+                  20 m of travel back); nav_msgs/Path of its keyframes (one a metre, poses of
+                  base_link in map) on /slam/path at every correction and every --path-every
+                  frames as it grows, and the true path on /ground_truth/path at the end (both
+                  latched). Without it odometry is exact and map -> odom fixed.
+  --drift-scale X  multiplies the odometry errors (default 1; 0: exact odometry)
+  --path-every N  frames between /slam/path messages as the path grows (default 10)
   --sensors LIST  comma-separated sensor kinds (default: cloud,depth,disparity,scan)
   --disparity-patches P  chance in [0, 1] of a patch of wrong disparity in each 24 x 24 px cell,
                   persisting over 10 frames, as a real matcher's correlated errors (default 0)
@@ -43,17 +55,49 @@ playback, as a recorded static_transform_publisher). Sensors:
 Exit status: 0 done, 2 bad arguments, 1 failure while writing.
 )";
 
+// --drift and its options: the drifting odometry and the SLAM stand-in.
+void parseDrift(const CommandLine& line, SimulatedRecordingConfig* config) {
+  if (!line.has("drift")) {
+    if (line.has("drift-scale") || line.has("path-every")) {
+      throw UsageError("--drift-scale and --path-every need --drift SEED");
+    }
+    return;
+  }
+  const int seed = line.intValue("drift", 0);
+  if (seed < 0) throw UsageError("--drift SEED must be >= 0");
+  config->drift = true;
+  config->odometry_drift.seed = static_cast<unsigned>(seed);
+  const double scale = line.doubleValue("drift-scale", 1.0);
+  if (!(scale >= 0.0)) throw UsageError("--drift-scale must be >= 0");
+  config->odometry_drift = config->odometry_drift.scaled(scale);
+  config->path_every = line.intValue("path-every", config->path_every);
+  if (config->path_every < 1) throw UsageError("--path-every must be at least 1");
+}
+
 SimulatedRecordingConfig parseConfig(const CommandLine& line) {
   SimulatedRecordingConfig config;
   config.scene = line.value("scene", config.scene);
-  config.frames = line.intValue("frames", config.frames);
   config.rate_hz = line.doubleValue("rate", config.rate_hz);
-  if (config.frames < 1) throw UsageError("--frames must be at least 1");
   if (!(config.rate_hz > 0.0)) throw UsageError("--rate must be > 0");
+  if (config.scene == "building") {
+    config.loop.step_m = line.doubleValue("step", config.loop.step_m);
+    config.loop.laps = line.doubleValue("laps", config.loop.laps);
+    if (!(config.loop.step_m > 0.0)) throw UsageError("--step must be > 0");
+    if (!(config.loop.laps > 0.0) || config.loop.laps > 100.0) {
+      throw UsageError("--laps must be > 0 and at most 100");
+    }
+    config.frames = loopPathFrames(config.loop);
+  } else if (line.has("step") || line.has("laps")) {
+    throw UsageError("--step and --laps are for --scene building");
+  }
+  config.frames = line.intValue("frames", config.frames);
+  if (config.frames < 1) throw UsageError("--frames must be at least 1");
+  parseDrift(line, &config);
   try {
-    makeSimulatedWorld(config.scene, 1);  // checks the name before any file is written
+    // Checks the name (and that the building's loop has the frames) before any file is written.
+    makeSimulatedWorld(config.scene, config.scene == "building" ? config.frames : 1, config.loop);
   } catch (const std::invalid_argument& error) {
-    throw UsageError(std::string("--scene: ") + error.what());
+    throw UsageError(std::string("--scene / --frames: ") + error.what());
   }
   return config;
 }
@@ -94,7 +138,8 @@ std::vector<std::unique_ptr<SimulatedSensor>> parseSensors(const CommandLine& li
 int run(int argc, char** argv) {
   const CommandLine line(
       argc, argv,
-      {"output", "scene", "frames", "rate", "sensors", "disparity-patches", "image-size", "every"},
+      {"output", "scene", "frames", "rate", "sensors", "disparity-patches", "image-size", "every",
+       "step", "laps", "drift", "drift-scale", "path-every"},
       {"help"});
   const SimulatedRecordingConfig config = parseConfig(line);
   const std::string output = line.required("output");
@@ -105,7 +150,8 @@ int run(int argc, char** argv) {
     throw UsageError("cannot write --output " + output + ": " + error.what());
   }
   std::cout << "simulate_recording: wrote " << config.frames << " frames of scene '" << config.scene
-            << "' at " << config.rate_hz << " Hz to " << output << "\n";
+            << "' at " << config.rate_hz << " Hz" << (config.drift ? " with drift" : "") << " to "
+            << output << "\n";
   return 0;
 }
 

@@ -1,7 +1,8 @@
 // Ready-made scenes. All use the world frame of REP-103 (x forward, y left, z up, metres).
 #pragma once
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <vector>
 
 #include "occupancy_fusion/sim/scene.h"
 
@@ -63,6 +64,37 @@ Scene makeAisleScene();
 // cabinet. The ellipse about (0.3, 0.1) with half-axes 3.2 and 2.2 m, and the line y = 0.15 from
 // x = -4 to 4, are free at 1.1 m height.
 Scene makeOfficeScene();
+
+// A building floor for loop closures: 40 x 25 m (x in [-20, 20], y in [-12.5, 12.5]), floor
+// (half-space z <= 0), walls 2.5 m high, no ceiling; exterior walls 0.2 m thick along the inside
+// of the outline, inner walls 0.15 m thick, doorways 1 m wide and full height.
+//  - A ring corridor, 2 m wide: free between its outer walls (faces at x = +-16, y = +-8.5) and
+//    the central block (faces at x = +-14, y = +-6.5). Its free centre line is the rectangle
+//    x in [-15, 15], y in [-7.5, 7.5] (90 m; buildingLoopCentreLine()); nothing stands within
+//    0.6 m of it (walls 1 m away, at the corners 1.41 m from the inner corner).
+//  - Inside the ring, a central block of six rooms: a spine wall along y = 0 (a doorway at
+//    x = -9.5) and partitions at x = +-5; doorways onto the corridor at x = -9, 2, 9 (north side),
+//    x = -10, -2, 10 (south side), y = 3.5 (west) and y = -3 (east).
+//  - Outside the ring, rooms between the corridor and the exterior walls: north, four rooms
+//    (partitions at x = -8, 0, 8; doorways at x = -12, -3, 4.5, 12.5); south, a hall
+//    (x in [-16, 4], three columns, doorways at x = -11, -1) and a room (doorway at x = 10); west,
+//    one room (doorway at y = 2); east, two rooms (partition at y = 0; doorways at y = -4, 4.5).
+//  - In the corridor, against its walls 0.6-1 m from the centre line: pillars (r = 0.15 m) at
+//    (-6, -8.3), (14.2, 2) and (6, 8.3); cabinets 1.8 m high at x in [4, 4.8] (south, inner wall),
+//    x in [-1, -0.2] (north, inner wall) and y in [-3, -2.2] (west, outer wall); low boxes at
+//    y in [-1.5, -0.9] (east), x in [-6, -5.5] (north) and y in [-5, -3.8] (west). The rooms hold
+//    tables, a desk, shelves, cabinets, columns, crates, a barrel and spheres.
+Scene makeBuildingFloorScene();
+Eigen::AlignedBox2d buildingLoopCentreLine();  // x in [-15, 15], y in [-7.5, 7.5]
+
+// Robot (body) poses every step_m metres along the building's corridor loop for `laps` laps
+// (roundedRectanglePath of buildingLoopCentreLine() with 1 m corner arcs: 88.28 m per lap):
+// from (0, -7.5) in the south corridor heading +x, counter-clockwise (east, north, west, south),
+// z = 0, yaw along the direction of travel. The default 1.25 laps returns to the start once (a
+// loop closure) and goes on over corridor already seen. Throws std::invalid_argument unless
+// step_m > 0 and laps >= 0.
+std::vector<Eigen::Isometry3d> buildingLoopPath(double step_m = 0.2, double laps = 1.25);
+double buildingLoopLength();  // m per lap
 
 }  // namespace sim
 }  // namespace occupancy_fusion

@@ -42,5 +42,19 @@ std::vector<Eigen::Isometry3d> straightLinePath(const Eigen::Vector3d& start,
                                                 const Eigen::Vector3d& end, int n, double yaw_start,
                                                 double yaw_end);
 
+// Robot (body) poses every step_m metres of travel along the outline of `rectangle` (x, y in m)
+// with its corners rounded to arcs of corner_radius, driven counter-clockwise (seen from above)
+// for `laps` laps: pose k lies k * step_m along the outline from the start (start_x, min y) on the
+// bottom side, heading +x, z = 0, yaw along the direction of travel (so it turns smoothly, by
+// step_m / corner_radius per pose, on the arcs). floor(laps * length / step_m) + 1 poses. Throws
+// std::invalid_argument unless step_m > 0, laps >= 0, 0 < corner_radius <= half the shorter side
+// and start_x lies on the straight part of the bottom side.
+std::vector<Eigen::Isometry3d> roundedRectanglePath(const Eigen::AlignedBox2d& rectangle,
+                                                    double corner_radius, double start_x,
+                                                    double step_m, double laps);
+
+// Length (m) of one lap of roundedRectanglePath: the perimeter less 8 - 2 pi corner radii.
+double roundedRectangleLength(const Eigen::AlignedBox2d& rectangle, double corner_radius);
+
 }  // namespace sim
 }  // namespace occupancy_fusion

@@ -1,6 +1,7 @@
 // Writes rosbags of the scene simulator: a robot moving through a scene with its sensors, each
 // sensor's messages on its topic and the robot's poses on /tf and /tf_static (REP-105: map ->
-// odom -> base_link, then static sensor mounts). Deterministic: the same config gives the same
+// odom -> base_link, then static sensor mounts), optionally with drifting odometry and a SLAM
+// stand-in's corrections and keyframe path. Deterministic: the same config gives the same
 // messages. A new sensor kind is a new SimulatedSensor.
 #pragma once
 
@@ -15,6 +16,8 @@
 
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/laser_scanner.h"
+#include "occupancy_fusion/sim/localisation_stand_in.h"
+#include "occupancy_fusion/sim/odometry_drift.h"
 #include "occupancy_fusion/sim/scene.h"
 #include "occupancy_fusion/sim/stereo_camera.h"
 
@@ -26,12 +29,23 @@ struct SimulatedWorld {
   std::vector<Eigen::Isometry3d> T_map_base;  // robot (base_link) pose per frame
 };
 
+// The building scene's path: sim::buildingLoopPath(step_m, laps).
+struct LoopPathOptions {
+  double step_m = 0.2;  // m between frames
+  double laps = 1.25;   // once round and back to the start (a loop closure), then a quarter more
+};
+
 // Scene names: "room" (sim::makeRoomScene, the robot turns on a circle of 0.5 m around the free
 // centre, facing outward), "corridor" (drives down the corridor), "box" and "spheres" (the depth
-// paper's scenes, the robot turning in place at the paper's camera position). Throws
+// paper's scenes, the robot turning in place at the paper's camera position), "building"
+// (sim::makeBuildingFloorScene, the first `frames` poses of the corridor loop; throws
+// std::invalid_argument when the loop has fewer: see loopPathFrames). Throws
 // std::invalid_argument listing the names for an unknown one.
-SimulatedWorld makeSimulatedWorld(const std::string& scene_name, int frames);
+SimulatedWorld makeSimulatedWorld(const std::string& scene_name, int frames,
+                                  const LoopPathOptions& loop = {});
 std::vector<std::string> simulatedSceneNames();
+// How many poses the building's loop path has.
+int loopPathFrames(const LoopPathOptions& loop);
 
 // One simulated sensor on the robot.
 class SimulatedSensor {
@@ -192,18 +206,32 @@ struct SimulatedRecordingConfig {
   int frames = 60;
   double rate_hz = 5.0;        // frames per second; stamps are start_time + k / rate_hz
   double start_time = 1000.0;  // s, stamp of frame 0 (bag times are stamps, like a recording)
+  LoopPathOptions loop;        // the building scene's path
   // Localisation's correction, published as map -> odom at every frame (odom -> base_link then
-  // carries the rest of the robot's pose).
+  // carries the rest of the robot's pose). Not used with drift.
   Eigen::Isometry3d T_map_odom =
       Eigen::Translation3d(0.3, -0.2, 0.0) * Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitZ());
+  // Drifting odometry and a graph-SLAM stand-in (sim/odometry_drift.h, sim/localisation_stand_in.h)
+  // instead of the fixed correction: odom -> base_link is the drifted odometry, map -> odom the
+  // stand-in's (it changes at its corrections), and the keyframe path goes on path_topic.
+  bool drift = false;
+  sim::OdometryDriftConfig odometry_drift;
+  sim::LocalisationConfig localisation;
+  std::string path_topic = "/slam/path";
+  std::string truth_path_topic = "/ground_truth/path";
+  int path_every =
+      10;  // frames: the growing path is written at most this often (and at corrections)
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
 // Writes the recording to bag_path (overwritten): /tf_static once (every sensor's mount) at
 // frame 0's stamp, then per frame /tf (map -> odom, odom -> base_link) and the messages of each
-// sensor due at it (SimulatedSensor::every), all stamped alike. Returns the number of frames
-// written.
+// sensor due at it (SimulatedSensor::every), all stamped alike. With drift, also the SLAM
+// keyframe path (nav_msgs/Path in map, one pose of base_link per keyframe stamped with its frame,
+// latched) on path_topic at frame 0, at every correction and, while keyframes are added, every
+// path_every frames and at the last frame; and the true path (every frame's pose, latched) on
+// truth_path_topic once, at the last frame's stamp. Returns the number of frames written.
 int writeSimulatedRecording(const SimulatedRecordingConfig& config,
                             const std::vector<std::unique_ptr<SimulatedSensor>>& sensors,
                             const std::string& bag_path);

@@ -1,22 +1,27 @@
-// Simulator nodelet: a robot drives a circle through an analytic scene; publishes TF
-// (map -> odom -> base_link -> sensor frames) and the data of its simulated sensors, stamped with
-// the current time.
+// Simulator nodelet: a robot drives a circle through an analytic scene, or the building's corridor
+// loop; publishes TF (map -> odom -> base_link -> sensor frames) and the data of its simulated
+// sensors, stamped with the current time. On the loop its odometry may drift, and a graph-SLAM
+// stand-in then publishes map -> odom and its keyframe path, correcting both at loop closures.
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
+#include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "occupancy_fusion/ros/path_message.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
 #include "occupancy_fusion/ros/transform_message.h"
 #include "occupancy_fusion/sim/scenes.h"
 
 #include "simulated_laser_scanner.h"
+#include "simulated_localisation.h"
 #include "simulated_sensors.h"
 #include "simulated_stereo_camera.h"
 
@@ -28,8 +33,9 @@ sim::Scene sceneNamed(const std::string& name) {
   if (name == "box") return sim::makeBoxScene();
   if (name == "spheres") return sim::makeSpheresScene();
   if (name == "corridor") return sim::makeCorridorScene();
-  throw std::invalid_argument("scene must be one of room, box, spheres, corridor; got '" + name +
-                              "'");
+  if (name == "building") return sim::makeBuildingFloorScene();
+  throw std::invalid_argument("scene must be one of room, box, spheres, corridor, building; got '" +
+                              name + "'");
 }
 
 // The robot's path: a horizontal circle at constant speed, the body turned by yaw_offset from
@@ -81,6 +87,9 @@ class Simulator : public nodelet::Nodelet {
       throw;
     }
     start_ = ros::Time::now();
+    if (drifting()) {
+      path_publisher_ = getNodeHandle().advertise<nav_msgs::Path>("slam/path", 1, /*latch=*/true);
+    }
     publishStaticTransforms();
     pause_service_ = getPrivateNodeHandle().advertiseService("pause", &Simulator::onPause, this);
     ros::NodeHandle& node_handle = getNodeHandle();
@@ -99,7 +108,8 @@ class Simulator : public nodelet::Nodelet {
             raw->publish(scene_, bodyPoseAt(stamp), stamp);
           }));
     }
-    NODELET_INFO("simulating scene '%s' with %zu sensor(s)", scene_name_.c_str(), sensors_.size());
+    NODELET_INFO("simulating scene '%s' with %zu sensor(s)%s", scene_name_.c_str(), sensors_.size(),
+                 drifting() ? ", drifting odometry and a SLAM stand-in" : "");
   }
 
   void readParameters(const ParameterSource& parameters) {
@@ -110,7 +120,7 @@ class Simulator : public nodelet::Nodelet {
     parameters.get("base_frame", &base_frame_);
     parameters.get("tf_rate", &tf_rate_);
     if (!(tf_rate_ > 0.0)) throw std::invalid_argument("tf_rate must be a positive number of Hz");
-    path_ = readCirclePath(parameters);
+    readTrajectory(parameters);
     sensors_.push_back(std::make_unique<SimulatedDepthCamera>(
         getNodeHandle(), readSimulatedDepthCameraConfig(parameters, "camera/")));
     appendSimulatedLaserScanners(getNodeHandle(), parameters, &sensors_);
@@ -118,10 +128,39 @@ class Simulator : public nodelet::Nodelet {
         getNodeHandle(), readSimulatedStereoCameraConfig(parameters, "stereo/")));
   }
 
+  // trajectory/type: circle (CirclePath), or loop (the building's corridor loop, with drift/ and
+  // localisation/ for its odometry and SLAM stand-in).
+  void readTrajectory(const ParameterSource& parameters) {
+    std::string type = "circle";
+    parameters.get("trajectory/type", &type);
+    bool drift = false;
+    parameters.get("drift/enabled", &drift);
+    if (type == "circle") {
+      if (drift) throw std::invalid_argument("drift/enabled needs trajectory/type loop");
+      path_ = readCirclePath(parameters);
+    } else if (type == "loop") {
+      if (scene_name_ != "building") {
+        throw std::invalid_argument(
+            "trajectory/type loop drives the building's corridor loop: scene must be building");
+      }
+      loop_.emplace(readLoopMotionConfig(parameters), tf_rate_);
+    } else {
+      throw std::invalid_argument("trajectory/type must be circle or loop; got '" + type + "'");
+    }
+  }
+
+  bool drifting() const { return loop_ && loop_->track(); }
+
   // The robot stands still while paused: path time excludes the paused intervals.
-  Eigen::Isometry3d bodyPoseAt(const ros::Time& stamp) const {
+  double pathSeconds(const ros::Time& stamp) const {
     const ros::Time path_clock = paused_ ? pause_start_ : stamp;
-    return path_.bodyPoseAt((path_clock - start_ - paused_total_).toSec());
+    return (path_clock - start_ - paused_total_).toSec();
+  }
+
+  // The true body pose in the map: what the sensors see.
+  Eigen::Isometry3d bodyPoseAt(const ros::Time& stamp) const {
+    const double seconds = pathSeconds(stamp);
+    return loop_ ? loop_->truth(loop_->frameAt(seconds)) : path_.bodyPoseAt(seconds);
   }
 
   // ~pause (std_srvs/SetBool): true stops the robot and the sensor data (TF keeps flowing), false
@@ -138,9 +177,12 @@ class Simulator : public nodelet::Nodelet {
   }
 
   void publishStaticTransforms() {
-    // odom coincides with map: the simulated odometry does not drift.
-    std::vector<geometry_msgs::TransformStamped> transforms = {
-        transformMessage(Eigen::Isometry3d::Identity(), map_frame_, odom_frame_, start_)};
+    // Without drift odom coincides with map; with it, map -> odom moves (publishBodyPose).
+    std::vector<geometry_msgs::TransformStamped> transforms;
+    if (!drifting()) {
+      transforms.push_back(
+          transformMessage(Eigen::Isometry3d::Identity(), map_frame_, odom_frame_, start_));
+    }
     for (const std::unique_ptr<SimulatedSensor>& sensor : sensors_) {
       for (const auto& transform : sensor->staticTransforms(base_frame_)) {
         transforms.push_back(transform);
@@ -152,8 +194,37 @@ class Simulator : public nodelet::Nodelet {
   void publishBodyPose(const ros::Time& stamp) {
     if (stamp == last_body_stamp_) return;  // tf2 rejects repeated stamps
     last_body_stamp_ = stamp;
-    broadcaster_.sendTransform(
-        transformMessage(bodyPoseAt(stamp), odom_frame_, base_frame_, stamp));
+    if (!loop_) {
+      broadcaster_.sendTransform(
+          transformMessage(bodyPoseAt(stamp), odom_frame_, base_frame_, stamp));
+      return;
+    }
+    const int frame = loop_->frameAt(pathSeconds(stamp));
+    std::vector<geometry_msgs::TransformStamped> transforms = {
+        transformMessage(loop_->odometry(frame), odom_frame_, base_frame_, stamp)};
+    if (drifting()) {
+      transforms.push_back(
+          transformMessage(loop_->mapToOdom(frame), map_frame_, odom_frame_, stamp));
+    }
+    broadcaster_.sendTransform(transforms);
+    if (drifting()) publishSlamPath(frame, stamp);
+  }
+
+  // slam/path (latched) whenever the stand-in's keyframe path changes: a keyframe is added or the
+  // past is corrected.
+  void publishSlamPath(int frame, const ros::Time& stamp) {
+    const sim::LocalisationTrack& track = *loop_->track();
+    const int keyframes = track.keyframeCountAt(frame);
+    const int correction = track.lastCorrectionAt(frame);
+    if (keyframes == published_keyframes_ && correction == published_correction_) return;
+    // A keyframe's stamp: when the robot was at its frame, on the path clock of now.
+    while (static_cast<int>(keyframe_stamps_.size()) < keyframes) {
+      const int keyframe_frame = track.keyframe_frames[keyframe_stamps_.size()];
+      keyframe_stamps_.push_back(stamp - ros::Duration((frame - keyframe_frame) / tf_rate_));
+    }
+    path_publisher_.publish(pathMessage(track.pathAt(frame), keyframe_stamps_, map_frame_, stamp));
+    published_keyframes_ = keyframes;
+    published_correction_ = correction;
   }
 
   std::string scene_name_ = "room";
@@ -163,6 +234,7 @@ class Simulator : public nodelet::Nodelet {
   std::string base_frame_ = "base_link";
   double tf_rate_ = 30.0;
   CirclePath path_;
+  std::optional<LoopMotion> loop_;  // trajectory/type loop
   std::vector<std::unique_ptr<SimulatedSensor>> sensors_;
 
   ros::Time start_;
@@ -171,6 +243,10 @@ class Simulator : public nodelet::Nodelet {
   ros::Time pause_start_;
   ros::Duration paused_total_;
   ros::ServiceServer pause_service_;
+  ros::Publisher path_publisher_;
+  std::vector<ros::Time> keyframe_stamps_;  // of the keyframes published so far
+  int published_keyframes_ = -1;
+  int published_correction_ = -1;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   ros::Timer tf_timer_;

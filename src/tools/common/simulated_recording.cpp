@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "occupancy_fusion/ros/path_message.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"
 #include "occupancy_fusion/tools/ros_conversions.h"
@@ -74,10 +76,27 @@ ros::Time stampOf(const SimulatedRecordingConfig& config, int frame) {
 
 }  // namespace
 
-std::vector<std::string> simulatedSceneNames() { return {"room", "corridor", "box", "spheres"}; }
+std::vector<std::string> simulatedSceneNames() {
+  return {"room", "corridor", "box", "spheres", "building"};
+}
 
-SimulatedWorld makeSimulatedWorld(const std::string& scene_name, int frames) {
+int loopPathFrames(const LoopPathOptions& loop) {
+  return static_cast<int>(sim::buildingLoopPath(loop.step_m, loop.laps).size());
+}
+
+SimulatedWorld makeSimulatedWorld(const std::string& scene_name, int frames,
+                                  const LoopPathOptions& loop) {
   if (frames < 1) throw std::invalid_argument("frames must be >= 1, got " + std::to_string(frames));
+  if (scene_name == "building") {
+    std::vector<Eigen::Isometry3d> path = sim::buildingLoopPath(loop.step_m, loop.laps);
+    if (static_cast<int>(path.size()) < frames) {
+      throw std::invalid_argument("the building loop has " + std::to_string(path.size()) +
+                                  " frames at this step and laps, fewer than " +
+                                  std::to_string(frames));
+    }
+    path.resize(frames);
+    return {sim::makeBuildingFloorScene(), path};
+  }
   if (scene_name == "room") return {sim::makeRoomScene(), roomPath(frames)};
   if (scene_name == "corridor") return {sim::makeCorridorScene(), corridorPath(frames)};
   if (scene_name == "box") {
@@ -316,6 +335,12 @@ std::vector<std::unique_ptr<SimulatedSensor>> makeSimulatedSensors(
 
 void SimulatedRecordingConfig::validate() const {
   if (frames < 1) throw std::invalid_argument("frames must be >= 1");
+  if (drift) {
+    odometry_drift.validate();
+    localisation.validate();
+    if (path_every < 1) throw std::invalid_argument("path_every must be >= 1");
+    checkFrames({path_topic, truth_path_topic});
+  }
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
     throw std::invalid_argument("rate_hz must be > 0");
   if (!(start_time > 0.0) || !std::isfinite(start_time)) {
@@ -324,11 +349,66 @@ void SimulatedRecordingConfig::validate() const {
   }
 }
 
+namespace {
+
+// The robot's transforms per frame: map -> odom and odom -> base_link.
+struct RobotTransforms {
+  std::vector<Eigen::Isometry3d> T_map_odom;
+  std::vector<Eigen::Isometry3d> T_odom_base;
+  std::optional<sim::LocalisationTrack> track;  // with drift: the SLAM stand-in's output
+};
+
+RobotTransforms robotTransforms(const SimulatedRecordingConfig& config,
+                                const std::vector<Eigen::Isometry3d>& T_map_base) {
+  RobotTransforms transforms;
+  if (!config.drift) {
+    // The fixed correction with exact odometry: the robot's pose split at the same odom.
+    for (const Eigen::Isometry3d& pose : T_map_base) {
+      transforms.T_map_odom.push_back(config.T_map_odom);
+      transforms.T_odom_base.push_back(config.T_map_odom.inverse() * pose);
+    }
+    return transforms;
+  }
+  transforms.T_odom_base = sim::driftedOdometry(T_map_base, config.odometry_drift);
+  transforms.track = sim::runLocalisation(T_map_base, transforms.T_odom_base, config.localisation);
+  transforms.T_map_odom = transforms.track->T_map_odom;
+  return transforms;
+}
+
+// Writes the keyframe path as published at `frame` when it has changed: at every correction, and
+// as it grows every path_every frames and at the last frame. `written` is the keyframe count of
+// the last path written (-1: none yet).
+void writeSlamPath(const SimulatedRecordingConfig& config, const sim::LocalisationTrack& track,
+                   int frame, int* written, rosbag::Bag* bag) {
+  const int keyframes = track.keyframeCountAt(frame);
+  const bool corrected = track.lastCorrectionAt(frame) == frame;
+  const bool due = frame % config.path_every == 0 || frame == config.frames - 1;
+  if (!corrected && !(due && keyframes != *written)) return;
+  std::vector<ros::Time> stamps;
+  for (int i = 0; i < keyframes; ++i) stamps.push_back(stampOf(config, track.keyframe_frames[i]));
+  const ros::Time stamp = stampOf(config, frame);
+  bag->write(config.path_topic, stamp, pathMessage(track.pathAt(frame), stamps, "map", stamp),
+             latchedConnectionHeader<nav_msgs::Path>("/simulate_recording"));
+  *written = keyframes;
+}
+
+void writeTruthPath(const SimulatedRecordingConfig& config,
+                    const std::vector<Eigen::Isometry3d>& T_map_base, rosbag::Bag* bag) {
+  std::vector<ros::Time> stamps;
+  for (int frame = 0; frame < config.frames; ++frame) stamps.push_back(stampOf(config, frame));
+  bag->write(config.truth_path_topic, stamps.back(),
+             pathMessage(T_map_base, stamps, "map", stamps.back()),
+             latchedConnectionHeader<nav_msgs::Path>("/simulate_recording"));
+}
+
+}  // namespace
+
 int writeSimulatedRecording(const SimulatedRecordingConfig& config,
                             const std::vector<std::unique_ptr<SimulatedSensor>>& sensors,
                             const std::string& bag_path) {
   config.validate();
-  const SimulatedWorld world = makeSimulatedWorld(config.scene, config.frames);
+  const SimulatedWorld world = makeSimulatedWorld(config.scene, config.frames, config.loop);
+  const RobotTransforms robot = robotTransforms(config, world.T_map_base);
   rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
 
   tf2_msgs::TFMessage mounts;
@@ -341,19 +421,22 @@ int writeSimulatedRecording(const SimulatedRecordingConfig& config,
   bag.write("/tf_static", stampOf(config, 0), mounts,
             latchedConnectionHeader<tf2_msgs::TFMessage>("/simulate_recording"));
 
+  int written_keyframes = -1;
   for (int frame = 0; frame < config.frames; ++frame) {
     const ros::Time stamp = stampOf(config, frame);
     const Eigen::Isometry3d& T_map_base = world.T_map_base[frame];
     tf2_msgs::TFMessage poses;
-    poses.transforms.push_back(transformMessage(config.T_map_odom, "map", "odom", stamp));
+    poses.transforms.push_back(transformMessage(robot.T_map_odom[frame], "map", "odom", stamp));
     poses.transforms.push_back(
-        transformMessage(config.T_map_odom.inverse() * T_map_base, "odom", "base_link", stamp));
+        transformMessage(robot.T_odom_base[frame], "odom", "base_link", stamp));
     bag.write("/tf", stamp, poses);
+    if (robot.track) writeSlamPath(config, *robot.track, frame, &written_keyframes, &bag);
     for (const std::unique_ptr<SimulatedSensor>& sensor : sensors) {
       if (frame % sensor->every() != 0) continue;
       sensor->writeFrame(world.scene, T_map_base, frame / sensor->every(), stamp, &bag);
     }
   }
+  if (robot.track) writeTruthPath(config, world.T_map_base, &bag);
   bag.close();
   return config.frames;
 }
