@@ -161,6 +161,8 @@ void MapReanchoring::countCorrection(const SubmapMoveResult& result, double stam
   statistics_.submaps_moved += result.moved;
   statistics_.blocks_rewritten += result.blocks_rewritten;
   statistics_.last_correction_seconds = result.seconds;
+  statistics_.slowest_correction_seconds =
+      std::max(statistics_.slowest_correction_seconds, result.seconds);
   statistics_.last_correction_stamp = stamp;
 }
 

@@ -1,0 +1,82 @@
+// The loop-closure evaluation: a robot with a depth camera, two 2D lasers and a stereo camera
+// drives a building floor's corridor loop with drifting odometry while a graph-SLAM stand-in
+// (sim/localisation_stand_in.h) publishes map -> odom and its keyframe path, correcting the past
+// when the robot returns to a place it saw. The same rendered frames are mapped
+//  - as without submaps (frames placed by map -> odom at their time, never moved),
+//  - re-anchored by the path and by tf's map -> odom (mapping/map_reanchoring.h),
+//  - with the true poses all along,
+// and each map is measured against the scene and the true-pose map as the frames come: false
+// occupied voxels (in free space, farther than a voxel diagonal from any surface), coverage of
+// the scene's surface (a sample with an occupied voxel within one voxel), and the occupied cells
+// of the fused 2D grid (projected_map) against the true-pose map's (IoU). Shared by `benchmark
+// loop-closure` and the tests.
+#pragma once
+
+#include <cstddef>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "occupancy_fusion/map/fused_grid.h"
+#include "occupancy_fusion/mapping/map_reanchoring.h"
+#include "occupancy_fusion/sim/localisation_stand_in.h"
+#include "occupancy_fusion/sim/odometry_drift.h"
+
+namespace occupancy_fusion {
+
+struct LoopClosureCase {
+  double resolution = 0.05;  // m
+  double step = 0.2;         // m between frames along the loop (5 Hz: 1 m/s)
+  double laps = 1.25;        // of the 88 m loop: back at the start once, then on
+  double rate_hz = 5.0;      // frames per second (the stamps)
+  sim::OdometryDriftConfig drift = sim::OdometryDriftConfig();
+  sim::LocalisationConfig localisation;
+  bool depth = true, lasers = true, stereo = true;
+  int evaluate_every = 25;       // frames between the points of the curves (and the last frame)
+  double submap_distance = 4.0;  // m (reanchoring/submap_distance)
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+enum class LoopClosureMapping { kToday, kPath, kTf, kTruePoses };
+const char* loopClosureMappingName(LoopClosureMapping mapping);
+
+struct LoopClosureQuality {
+  int frame = 0;
+  std::size_t occupied = 0;
+  std::size_t false_occupied = 0;
+  double coverage = 0.0;          // of the scene's surface samples in the sensors' height band
+  std::size_t grid_occupied = 0;  // cells of the fused 2D grid
+  double grid_iou = 0.0;          // with the true-pose map's grid at the same frame
+};
+
+struct LoopClosureRun {
+  LoopClosureMapping mapping = LoopClosureMapping::kToday;
+  std::vector<LoopClosureQuality> curve;             // every evaluate_every frames, and the last
+  LoopClosureQuality last;                           // after the last frame
+  double depth_ms = 0, laser_ms = 0, stereo_ms = 0;  // integration per frame, pose lookup included
+  std::size_t map_bytes = 0;                         // voxels and laser layer
+  std::size_t submap_bytes = 0;                      // the submaps' changes (reanchored runs)
+  std::size_t submaps = 0;
+  std::size_t corrections = 0;  // that moved a submap
+  double slowest_correction_seconds = 0.0;
+  OccupancyRaster final_grid;  // projected_map after the last frame
+};
+
+struct LoopClosureResult {
+  LoopClosureCase setup;
+  int frames = 0;
+  std::vector<int> corrections;       // frames at which the stand-in corrected the past
+  double loop_length = 0.0;           // m of travel
+  double drift_before_closure = 0.0;  // m, odometry's error at the first correction
+  std::vector<LoopClosureRun> runs;   // true poses first, then as asked
+};
+
+// Renders the case's frames once and maps them as each of `mappings` (the true-pose run always
+// comes first: the others' grids are compared with its). `progress` (may be null) gets a line
+// per run.
+LoopClosureResult evaluateLoopClosure(const LoopClosureCase& setup,
+                                      const std::vector<LoopClosureMapping>& mappings,
+                                      std::ostream* progress);
+
+}  // namespace occupancy_fusion

@@ -1,0 +1,423 @@
+#include "occupancy_fusion/eval/loop_closure.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+
+#include "occupancy_fusion/mapping/mapping_session.h"
+#include "occupancy_fusion/sim/depth_camera.h"
+#include "occupancy_fusion/sim/laser_scanner.h"
+#include "occupancy_fusion/sim/scenes.h"
+#include "occupancy_fusion/sim/stereo_camera.h"
+#include "occupancy_fusion/sim/trajectory.h"
+
+namespace occupancy_fusion {
+namespace {
+
+constexpr double kStamp0 = 1000.0;  // s, frame 0
+constexpr double kSensorMaxRange = 6.0;
+
+// The robot's sensors: frame name and mount on base_link.
+struct Mount {
+  std::string frame;
+  Eigen::Isometry3d T_base_sensor;
+};
+
+// A depth camera 1 m up looking ahead and 0.3 rad down; a stereo camera 1.1 m up looking
+// 0.5 rad to the right and 0.2 rad down; lasers 0.25 m ahead facing forward and 0.25 m behind
+// facing backward, mounted upside down.
+const Mount& depthMount() {
+  static const Mount mount{"depth_optical", Eigen::Translation3d(0.1, 0.0, 1.0) *
+                                                Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()) *
+                                                Eigen::Isometry3d(sim::opticalFrameInBody())};
+  return mount;
+}
+const Mount& stereoMount() {
+  static const Mount mount{"stereo_optical", Eigen::Translation3d(0.05, -0.1, 1.1) *
+                                                 Eigen::AngleAxisd(-0.5, Eigen::Vector3d::UnitZ()) *
+                                                 Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()) *
+                                                 Eigen::Isometry3d(sim::opticalFrameInBody())};
+  return mount;
+}
+const std::vector<Mount>& laserMounts() {
+  static const std::vector<Mount> mounts = {
+      {"laser_front", Eigen::Isometry3d(Eigen::Translation3d(0.25, 0.0, 0.3))},
+      {"laser_rear", Eigen::Translation3d(-0.25, 0.0, 0.35) *
+                         Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX())}};
+  return mounts;
+}
+const Mount* mountOf(const std::string& frame) {
+  if (frame == depthMount().frame) return &depthMount();
+  if (frame == stereoMount().frame) return &stereoMount();
+  for (const Mount& mount : laserMounts()) {
+    if (frame == mount.frame) return &mount;
+  }
+  return nullptr;
+}
+
+const sim::PinholeCamera kCamera{160, 120, 138.6, 138.6, 79.5, 59.5};  // 60 deg wide
+constexpr double kBaseline = 0.12;
+
+// The drive: true poses, the drifted odometry and what the stand-in published.
+struct Drive {
+  std::vector<Eigen::Isometry3d> truth, odometry;
+  sim::LocalisationTrack track;
+  double rate_hz = 5.0;
+  double stamp(int k) const { return kStamp0 + k / rate_hz; }
+  int frameAt(double stamp) const {
+    return static_cast<int>(std::lround((stamp - kStamp0) * rate_hz));
+  }
+};
+
+// tf as the robot publishes it: map -> odom (the stand-in's), odom -> base_link (the odometry),
+// base_link -> sensors.
+class DrivePoses : public PoseSource {
+ public:
+  explicit DrivePoses(const Drive& drive) : drive_(drive) {}
+  std::optional<Eigen::Isometry3d> lookup(const std::string& target, const std::string& frame,
+                                          double stamp, std::string* why) const override {
+    const int k = drive_.frameAt(stamp);
+    if (k < 0 || k >= static_cast<int>(drive_.truth.size())) {
+      if (why != nullptr) *why = "no pose at that stamp";
+      return std::nullopt;
+    }
+    if (frame == "odom") return drive_.track.T_map_odom[k];  // target: map
+    const Mount* mount = mountOf(frame);
+    const Eigen::Isometry3d T_odom_frame =
+        drive_.odometry[k] *
+        (mount != nullptr ? mount->T_base_sensor : Eigen::Isometry3d::Identity());
+    if (target == "odom") return T_odom_frame;
+    return drive_.track.T_map_odom[k] * T_odom_frame;
+  }
+
+ private:
+  const Drive& drive_;
+};
+
+// One step's frames, rendered from the true poses.
+struct StepFrames {
+  std::optional<DepthImageFrame> depth;
+  std::vector<LaserScanFrame> scans;
+  std::optional<DisparityFrame> disparity;
+};
+
+FrameHeader headerFor(const char* kind, const Mount& mount, double stamp) {
+  FrameHeader header;
+  header.kind = kind;
+  header.source = std::string("/") + mount.frame;
+  header.frame_id = mount.frame;
+  header.stamp = stamp;
+  return header;
+}
+
+std::vector<StepFrames> renderFrames(const sim::Scene& scene, const Drive& drive,
+                                     const LoopClosureCase& setup) {
+  const int frames = static_cast<int>(drive.truth.size());
+  std::vector<StepFrames> result(static_cast<std::size_t>(frames));
+  sim::DisparityNoise noise;
+  noise.sigma_px = 0.2;
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int k = 0; k < frames; ++k) {
+    StepFrames& step = result[static_cast<std::size_t>(k)];
+    const Eigen::Isometry3d& T_map_base = drive.truth[static_cast<std::size_t>(k)];
+    if (setup.depth) {
+      DepthImageFrame frame;
+      frame.header = headerFor("depth", depthMount(), drive.stamp(k));
+      frame.camera = kCamera;
+      frame.depth =
+          sim::renderDepth(scene, kCamera, T_map_base * depthMount().T_base_sensor, kSensorMaxRange)
+              .depth;
+      step.depth = std::move(frame);
+    }
+    if (setup.lasers) {
+      for (const Mount& mount : laserMounts()) {
+        LaserScanFrame frame;
+        frame.header = headerFor("laser", mount, drive.stamp(k));
+        sim::LaserScanner scanner;
+        scanner.range_max = 20.0;
+        frame.scan =
+            toLaserScan(sim::renderScan(scene, scanner, T_map_base * mount.T_base_sensor, k));
+        step.scans.push_back(std::move(frame));
+      }
+    }
+    if (setup.stereo) {
+      const sim::DisparityImage image =
+          sim::renderDisparity(scene, kCamera, kBaseline, T_map_base * stereoMount().T_base_sensor,
+                               kSensorMaxRange, noise, k);
+      DisparityFrame frame;
+      frame.header = headerFor("disparity", stereoMount(), drive.stamp(k));
+      frame.camera.fx = frame.camera.fy = kCamera.fx;
+      frame.camera.cx = kCamera.cx;
+      frame.camera.cy = kCamera.cy;
+      frame.camera.baseline = kBaseline;
+      frame.width = image.width;
+      frame.height = image.height;
+      frame.disparity = image.disparity;
+      step.disparity = std::move(frame);
+    }
+  }
+  return result;
+}
+
+// The scene's ground truth at one voxel size: surface samples in the sensors' height band, and
+// free-space classes of voxels (cached).
+class GroundTruth {
+ public:
+  GroundTruth(const sim::Scene& scene, double resolution) : scene_(scene), resolution_(resolution) {
+    for (const Eigen::Vector3d& sample : scene.sampleSurface(resolution)) {
+      if (sample.z() < 0.1 || sample.z() > 2.0) continue;  // the floor is seen by all alike
+      samples_.push_back((sample / resolution).array().floor().cast<int>());
+    }
+  }
+
+  // Occupied voxels whose centre is in free space farther than a voxel diagonal from a surface.
+  std::size_t falseOccupied(const std::vector<VoxelIndex>& occupied) {
+    std::size_t count = 0;
+    for (const VoxelIndex& voxel : occupied) {
+      auto cached = is_false_.find(packKey(voxel));
+      if (cached == is_false_.end()) {
+        const Eigen::Vector3d centre = (voxel.cast<double>().array() + 0.5) * resolution_;
+        const bool is_false = !scene_.isOccupied(centre) &&
+                              scene_.distanceToSurface(centre) > std::sqrt(3.0) * resolution_;
+        cached = is_false_.emplace(packKey(voxel), is_false).first;
+      }
+      count += cached->second ? 1 : 0;
+    }
+    return count;
+  }
+
+  // Of the surface samples, those with an occupied voxel within one voxel.
+  double coverage(const SpatialKeySet& occupied) const {
+    std::size_t covered = 0;
+    for (const VoxelIndex& sample : samples_) {
+      for (int d = 0; d < 27; ++d) {
+        if (occupied.count(packKey(Eigen::Vector3i(
+                sample + Eigen::Vector3i(d % 3 - 1, (d / 3) % 3 - 1, d / 9 - 1))))) {
+          ++covered;
+          break;
+        }
+      }
+    }
+    return samples_.empty() ? 0.0 : static_cast<double>(covered) / samples_.size();
+  }
+
+ private:
+  const sim::Scene& scene_;
+  double resolution_;
+  std::vector<VoxelIndex> samples_;
+  SpatialKeyMap<bool> is_false_;
+};
+
+// The occupied cells of a grid by their map-frame cell index.
+SpatialKeySet occupiedCells(const OccupancyRaster& grid) {
+  SpatialKeySet cells;
+  const int x0 = static_cast<int>(std::lround(grid.origin_x / grid.resolution));
+  const int y0 = static_cast<int>(std::lround(grid.origin_y / grid.resolution));
+  for (int y = 0; y < grid.height; ++y) {
+    for (int x = 0; x < grid.width; ++x) {
+      if (grid.at(x, y) == OccupancyRaster::kOccupied)
+        cells.insert(packKey(CellIndex(x0 + x, y0 + y)));
+    }
+  }
+  return cells;
+}
+
+double intersectionOverUnion(const SpatialKeySet& a, const SpatialKeySet& b) {
+  std::size_t both = 0;
+  for (std::uint64_t key : a) both += b.count(key);
+  const std::size_t either = a.size() + b.size() - both;
+  return either == 0 ? 1.0 : static_cast<double>(both) / either;
+}
+
+MappingSessionConfig sessionConfig(const LoopClosureCase& setup, LoopClosureMapping mapping) {
+  MappingSessionConfig config;
+  config.map.resolution = setup.resolution;
+  config.fused_grid.min_z = 0.1;  // the map server's defaults: above the floor, below 2 m
+  config.fused_grid.max_z = 2.0;
+  config.reanchoring.source =
+      mapping == LoopClosureMapping::kPath ? ReanchoringConfig::Source::kPath
+      : mapping == LoopClosureMapping::kTf ? ReanchoringConfig::Source::kTf
+                                           : ReanchoringConfig::Source::kNone;
+  config.reanchoring.submap_distance = setup.submap_distance;
+  return config;
+}
+
+// The keyframe path as the stand-in published it at frame k.
+std::vector<StampedPose> publishedPath(const Drive& drive, int k) {
+  const std::vector<Eigen::Isometry3d> poses = drive.track.pathAt(k);
+  std::vector<StampedPose> path;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    path.push_back({drive.stamp(drive.track.keyframe_frames[i]), poses[i]});
+  }
+  return path;
+}
+
+class RunEvaluator {
+ public:
+  RunEvaluator(const sim::Scene& scene, const LoopClosureCase& setup)
+      : truth_(scene, setup.resolution) {}
+
+  LoopClosureQuality measure(const MappingSession& session, int frame,
+                             const std::map<int, SpatialKeySet>* true_grids,
+                             SpatialKeySet* grid_cells) {
+    LoopClosureQuality quality;
+    quality.frame = frame;
+    std::vector<VoxelIndex> occupied;
+    SpatialKeySet occupied_keys;
+    session.map().forEachOccupiedVoxel([&](const VoxelIndex& index, float) {
+      occupied.push_back(index);
+      occupied_keys.insert(packKey(index));
+    });
+    quality.occupied = occupied.size();
+    quality.false_occupied = truth_.falseOccupied(occupied);
+    quality.coverage = truth_.coverage(occupied_keys);
+    *grid_cells = occupiedCells(session.fusedGrid());
+    quality.grid_occupied = grid_cells->size();
+    if (true_grids != nullptr) {
+      quality.grid_iou = intersectionOverUnion(*grid_cells, true_grids->at(frame));
+    } else {
+      quality.grid_iou = 1.0;
+    }
+    return quality;
+  }
+
+ private:
+  GroundTruth truth_;
+};
+
+bool evaluatedAt(const LoopClosureCase& setup, int k, int frames) {
+  return k == frames - 1 || (k + 1) % setup.evaluate_every == 0;
+}
+
+LoopClosureRun mapOnce(const sim::Scene& scene, const LoopClosureCase& setup, const Drive& drive,
+                       const std::vector<StepFrames>& frames, LoopClosureMapping mapping,
+                       std::map<int, SpatialKeySet>* true_grids) {
+  const bool true_poses = mapping == LoopClosureMapping::kTruePoses;
+  const DrivePoses poses(drive);
+  MappingSession session(sessionConfig(setup, mapping), true_poses ? nullptr : &poses, nullptr);
+  RunEvaluator evaluator(scene, setup);
+  LoopClosureRun run;
+  run.mapping = mapping;
+  const int count = static_cast<int>(frames.size());
+  const auto place = [&](FrameHeader header, int k) {
+    if (true_poses) header.T_map_sensor = drive.truth[k] * mountOf(header.frame_id)->T_base_sensor;
+    return header;
+  };
+  for (int k = 0; k < count; ++k) {
+    const StepFrames& step = frames[static_cast<std::size_t>(k)];
+    if (step.depth) {
+      DepthImageFrame frame = *step.depth;
+      frame.header = place(frame.header, k);
+      session.integrate(frame);
+    }
+    for (const LaserScanFrame& scan : step.scans) {
+      LaserScanFrame frame = scan;
+      frame.header = place(frame.header, k);
+      session.integrate(frame);
+    }
+    if (step.disparity) {
+      DisparityFrame frame = *step.disparity;
+      frame.header = place(frame.header, k);
+      session.integrate(frame);
+    }
+    if (mapping == LoopClosureMapping::kPath && drive.track.pathChangedAt(k)) {
+      session.onPath(publishedPath(drive, k), drive.stamp(k));
+    }
+    if (!evaluatedAt(setup, k, count)) continue;
+    SpatialKeySet grid;
+    run.curve.push_back(evaluator.measure(session, k, true_poses ? nullptr : true_grids, &grid));
+    if (true_poses) (*true_grids)[k] = std::move(grid);
+  }
+  run.last = run.curve.back();
+  run.final_grid = session.fusedGrid();
+  const auto ms = [&](const char* kind) {
+    const auto it = session.statistics().by_kind.find(kind);
+    return it == session.statistics().by_kind.end() ? 0.0 : it->second.millisecondsPerFrame();
+  };
+  run.depth_ms = ms("depth");
+  run.laser_ms = ms("laser");
+  run.stereo_ms = ms("disparity");
+  run.map_bytes = session.map().memoryBytes() + session.laserLayer().memoryBytes();
+  if (const MapReanchoring* reanchoring = session.reanchoring()) {
+    run.submap_bytes = reanchoring->fusion().memoryBytes();
+    run.submaps = reanchoring->fusion().submaps().size();
+    const ReanchoringStatistics statistics = reanchoring->statistics();
+    run.corrections = statistics.corrections;
+    run.slowest_correction_seconds = statistics.slowest_correction_seconds;
+  }
+  return run;
+}
+
+}  // namespace
+
+void LoopClosureCase::validate() const {
+  if (!(resolution > 0.0) || !(step > 0.0) || !(laps > 0.0) || !(rate_hz > 0.0)) {
+    throw std::invalid_argument("loop closure case: resolution, step, laps and rate must be > 0");
+  }
+  if (evaluate_every < 1) throw std::invalid_argument("evaluate_every must be >= 1");
+  if (!depth && !lasers && !stereo) throw std::invalid_argument("no sensor");
+  drift.validate();
+  localisation.validate();
+}
+
+const char* loopClosureMappingName(LoopClosureMapping mapping) {
+  switch (mapping) {
+    case LoopClosureMapping::kToday:
+      return "without_submaps";
+    case LoopClosureMapping::kPath:
+      return "reanchored_path";
+    case LoopClosureMapping::kTf:
+      return "reanchored_tf";
+    case LoopClosureMapping::kTruePoses:
+      break;
+  }
+  return "true_poses";
+}
+
+LoopClosureResult evaluateLoopClosure(const LoopClosureCase& setup,
+                                      const std::vector<LoopClosureMapping>& mappings,
+                                      std::ostream* progress) {
+  setup.validate();
+  LoopClosureResult result;
+  result.setup = setup;
+  const sim::Scene scene = sim::makeBuildingFloorScene();
+  Drive drive;
+  drive.rate_hz = setup.rate_hz;
+  drive.truth = sim::buildingLoopPath(setup.step, setup.laps);
+  drive.odometry = sim::driftedOdometry(drive.truth, setup.drift);
+  drive.track = sim::runLocalisation(drive.truth, drive.odometry, setup.localisation);
+  result.frames = static_cast<int>(drive.truth.size());
+  result.corrections = drive.track.corrections;
+  result.loop_length = setup.step * (result.frames - 1);
+  if (!result.corrections.empty()) {
+    const int k = result.corrections.front();
+    const Eigen::Isometry3d before = drive.track.T_map_odom[k - 1] * drive.odometry[k];
+    result.drift_before_closure = (before.translation() - drive.truth[k].translation()).norm();
+  }
+  if (progress != nullptr) {
+    *progress << "loop closure: rendering " << result.frames << " frames\n";
+  }
+  const std::vector<StepFrames> frames = renderFrames(scene, drive, setup);
+  std::map<int, SpatialKeySet> true_grids;
+  std::vector<LoopClosureMapping> order = {LoopClosureMapping::kTruePoses};
+  for (LoopClosureMapping mapping : mappings) {
+    if (mapping != LoopClosureMapping::kTruePoses) order.push_back(mapping);
+  }
+  for (LoopClosureMapping mapping : order) {
+    const auto start = std::chrono::steady_clock::now();
+    result.runs.push_back(mapOnce(scene, setup, drive, frames, mapping, &true_grids));
+    if (progress != nullptr) {
+      *progress << "loop closure: mapped " << loopClosureMappingName(mapping) << " in "
+                << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+                << " s\n";
+    }
+  }
+  return result;
+}
+
+}  // namespace occupancy_fusion
