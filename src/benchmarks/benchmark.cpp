@@ -418,13 +418,16 @@ const std::vector<Workload>& workloads() {
        "[--resolution R] [--step M] [--laps L] [--drift_scale X] [--drift_seed K]\n"
        "      [--closure_radius M] [--correct_every N] [--submap_distance M]\n"
        "      [--sensors depth,laser,stereo] [--evaluate_every N] [--curves CSV] [--grids PREFIX]\n"
+       "      [--config FILE ...] (default: the shipped depth, laser, disparity and map server\n"
+       "      configs)\n"
        "      a depth camera, two lasers and a stereo camera around the simulated building's\n"
        "      88 m corridor loop on drifting odometry, a graph-SLAM stand-in correcting the past\n"
        "      at loop closures; mapped without submaps, re-anchored by its path and by tf's\n"
        "      map -> odom, and with the true poses: false-occupied voxels, surface coverage and\n"
        "      projected_map's IoU with the true-pose map, mapper times, memory, correction time",
        {"resolution", "step", "laps", "drift_scale", "drift_seed", "closure_radius",
-        "correct_every", "submap_distance", "sensors", "evaluate_every", "curves", "grids"},
+        "correct_every", "submap_distance", "sensors", "evaluate_every", "curves", "grids",
+        "config"},
        runLoopClosure},
   };
   return table;

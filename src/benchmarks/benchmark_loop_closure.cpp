@@ -14,12 +14,30 @@
 #include "occupancy_fusion/eval/loop_closure.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/tools/command_line.h"
+#include "occupancy_fusion/tools/yaml_parameter_source.h"
 
 namespace occupancy_fusion {
 namespace {
 
+// The mappers' settings: the given config files, else the shipped ones (as mapping.launch loads
+// them), with the fused band of map_server.yaml.
+MappingSessionConfig mappingConfig(const CommandLine& args) {
+  std::vector<std::string> files = args.values("config");
+  if (files.empty()) {
+    for (const char* name : {"depth_mapper", "laser_mapper", "disparity_mapper", "map_server"}) {
+      files.push_back(std::string(OCCUPANCY_FUSION_SOURCE_DIR) + "/config/" + name + ".yaml");
+    }
+  }
+  try {
+    return readMappingSessionConfig(YamlParameterSource::fromFiles(files, ""));
+  } catch (const std::exception& error) {
+    throw UsageError(std::string("--config: ") + error.what());
+  }
+}
+
 LoopClosureCase caseFrom(const CommandLine& args) {
   LoopClosureCase setup;
+  setup.mapping = mappingConfig(args);
   setup.resolution = args.doubleValue("resolution", setup.resolution);
   setup.step = args.doubleValue("step", setup.step);
   setup.laps = args.doubleValue("laps", setup.laps);
@@ -54,25 +72,28 @@ void printRun(const LoopClosureResult& result, const LoopClosureRun& run) {
       "loop_closure mapping=%s resolution=%.3f frames=%d corrections=%zu false_occupied=%zu "
       "false_occupied_x_true_poses=%.2f excess_false_occupied_x_without_submaps=%.2f "
       "coverage=%.3f coverage_x_true_poses=%.3f "
-      "projected_iou=%.3f occupied=%zu depth_ms=%.2f laser_ms=%.2f stereo_ms=%.2f "
+      "projected_iou=%.3f projected_within_one_cell=%.3f occupied=%zu depth_ms=%.2f laser_ms=%.2f "
+      "stereo_ms=%.2f "
       "map_mb=%.1f submaps=%zu submap_mb=%.1f slowest_correction_ms=%.0f\n",
       loopClosureMappingName(run.mapping), result.setup.resolution, result.frames, run.corrections,
       q.false_occupied, truth_false > 0 ? q.false_occupied / truth_false : 0.0,
       today_excess > 0 ? excess / today_excess : 0.0, q.coverage,
-      truth.last.coverage > 0 ? q.coverage / truth.last.coverage : 0.0, q.grid_iou, q.occupied,
-      run.depth_ms, run.laser_ms, run.stereo_ms, run.map_bytes / 1048576.0, run.submaps,
-      run.submap_bytes / 1048576.0, 1e3 * run.slowest_correction_seconds);
+      truth.last.coverage > 0 ? q.coverage / truth.last.coverage : 0.0, q.grid_iou,
+      q.grid_agreement, q.occupied, run.depth_ms, run.laser_ms, run.stereo_ms,
+      run.map_bytes / 1048576.0, run.submaps, run.submap_bytes / 1048576.0,
+      1e3 * run.slowest_correction_seconds);
 }
 
 void writeCurves(const LoopClosureResult& result, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out << "mapping,frame,occupied,false_occupied,coverage,grid_occupied,projected_iou\n";
+  out << "mapping,frame,occupied,false_occupied,coverage,grid_occupied,projected_iou,"
+         "projected_within_one_cell\n";
   for (const LoopClosureRun& run : result.runs) {
     for (const LoopClosureQuality& q : run.curve) {
       out << loopClosureMappingName(run.mapping) << "," << q.frame << "," << q.occupied << ","
           << q.false_occupied << "," << q.coverage << "," << q.grid_occupied << "," << q.grid_iou
-          << "\n";
+          << "," << q.grid_agreement << "\n";
     }
   }
   std::ostringstream corrections;

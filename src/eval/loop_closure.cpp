@@ -227,6 +227,25 @@ SpatialKeySet occupiedCells(const OccupancyRaster& grid) {
   return cells;
 }
 
+// Of a's and b's cells, those with a cell of the other within one cell.
+double agreementWithinOneCell(const SpatialKeySet& a, const SpatialKeySet& b) {
+  const auto matched = [](const SpatialKeySet& from, const SpatialKeySet& to) {
+    std::size_t count = 0;
+    for (std::uint64_t key : from) {
+      const CellIndex cell = unpackKey2(key);
+      for (int d = 0; d < 9; ++d) {
+        if (to.count(packKey(CellIndex(cell + CellIndex(d % 3 - 1, d / 3 - 1))))) {
+          ++count;
+          break;
+        }
+      }
+    }
+    return count;
+  };
+  const std::size_t total = a.size() + b.size();
+  return total == 0 ? 1.0 : static_cast<double>(matched(a, b) + matched(b, a)) / total;
+}
+
 double intersectionOverUnion(const SpatialKeySet& a, const SpatialKeySet& b) {
   std::size_t both = 0;
   for (std::uint64_t key : a) both += b.count(key);
@@ -235,10 +254,8 @@ double intersectionOverUnion(const SpatialKeySet& a, const SpatialKeySet& b) {
 }
 
 MappingSessionConfig sessionConfig(const LoopClosureCase& setup, LoopClosureMapping mapping) {
-  MappingSessionConfig config;
+  MappingSessionConfig config = setup.mapping;
   config.map.resolution = setup.resolution;
-  config.fused_grid.min_z = 0.1;  // the map server's defaults: above the floor, below 2 m
-  config.fused_grid.max_z = 2.0;
   config.reanchoring.source =
       mapping == LoopClosureMapping::kPath ? ReanchoringConfig::Source::kPath
       : mapping == LoopClosureMapping::kTf ? ReanchoringConfig::Source::kTf
@@ -280,8 +297,9 @@ class RunEvaluator {
     quality.grid_occupied = grid_cells->size();
     if (true_grids != nullptr) {
       quality.grid_iou = intersectionOverUnion(*grid_cells, true_grids->at(frame));
+      quality.grid_agreement = agreementWithinOneCell(*grid_cells, true_grids->at(frame));
     } else {
-      quality.grid_iou = 1.0;
+      quality.grid_iou = quality.grid_agreement = 1.0;
     }
     return quality;
   }

@@ -6,10 +6,12 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -341,13 +343,50 @@ class StoreSubmaps {
     }
   }
 
-  // Submap `id`'s changes added to block `index`'s cells: each cell takes the change of the
-  // submap's cell under its centre (nearest cell) at the submap's placement.
+  // The changes of a record's blocks (tiles) that one destination block reads, each expanded once:
+  // a moved block of the map's grid covers parts of up to 2^D of the written grid's.
+  class SourceCache {
+   public:
+    explicit SourceCache(const Record& record) : record_(record) {}
+    // The change of one cell of the written grid (NaN: none, or no such block).
+    float change(const Index& cell) {
+      const std::uint64_t key = Traits::key(Traits::containerOf(cell));
+      const Cells* source = nullptr;
+      int slot = 0;
+      while (slot < used_ && keys_[slot] != key) ++slot;
+      if (slot < used_) {
+        source = sources_[slot];
+      } else {
+        slot = next_;
+        next_ = (next_ + 1) % kSlots;
+        used_ = std::max(used_, slot + 1);
+        keys_[slot] = key;
+        auto it = record_.changes.find(key);
+        source = it == record_.changes.end() ? nullptr : &Traits::view(it->second, &scratch_[slot]);
+        sources_[slot] = source;
+      }
+      return source == nullptr ? kNoChange : source->log_odds[Traits::linearOf(cell)];
+    }
+
+   private:
+    static constexpr int kSlots = 8;
+    static constexpr float kNoChange = std::numeric_limits<float>::quiet_NaN();
+    const Record& record_;
+    std::array<std::uint64_t, kSlots> keys_{};
+    std::array<const Cells*, kSlots> sources_{};
+    std::array<Cells, kSlots> scratch_;
+    int used_ = 0, next_ = 0;
+  };
+
+  // Submap `id`'s changes added to block `index`'s cells at the submap's placement. A moved
+  // submap's grid no longer lines up with the map's: each cell takes the change of the written
+  // cell under its centre (nearest cell; interpolating between cells, measured, placed thin walls
+  // no better and cost four to eight reads a cell: docs/loop_closures.md).
   void foldInto(int id, const SubmapPlacement& placement, const Index& index, Cells* cells) const {
     const Record& record = records_[id];
     const float min = store_->minLogOdds(), max = store_->maxLogOdds();
-    Cells scratch;
     if (placement.atWrittenPlace()) {
+      Cells scratch;
       auto it = record.changes.find(Traits::key(index));
       if (it != record.changes.end()) {
         addLogOddsChanges(Traits::view(it->second, &scratch), min, max, cells);
@@ -356,23 +395,13 @@ class StoreSubmaps {
     }
     const Eigen::Isometry3d to_written = placement.written * placement.placed.inverse();
     const double resolution = cellSide();
-    std::uint64_t cached_key = 0;
-    const Cells* source = nullptr;
-    bool cached = false;
+    auto cache = std::make_unique<SourceCache>(record);
     for (int linear = 0; linear < Traits::kCellCount; ++linear) {
       const Vector center =
           (Traits::cellOf(index, linear).template cast<double>() + Vector::Constant(0.5)) *
           resolution;
-      const Index cell = Traits::floorIndex(to_written * Traits::point(center) / resolution);
-      const std::uint64_t key = Traits::key(Traits::containerOf(cell));
-      if (!cached || key != cached_key) {
-        auto it = record.changes.find(key);
-        source = it == record.changes.end() ? nullptr : &Traits::view(it->second, &scratch);
-        cached_key = key;
-        cached = true;
-      }
-      if (source == nullptr) continue;
-      const float change = source->log_odds[Traits::linearOf(cell)];
+      const float change =
+          cache->change(Traits::floorIndex(to_written * Traits::point(center) / resolution));
       cells->set(linear, addLogOddsChange(cells->log_odds[linear], change, min, max));
     }
   }

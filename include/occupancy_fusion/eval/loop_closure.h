@@ -19,12 +19,16 @@
 
 #include "occupancy_fusion/map/fused_grid.h"
 #include "occupancy_fusion/mapping/map_reanchoring.h"
+#include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/sim/localisation_stand_in.h"
 #include "occupancy_fusion/sim/odometry_drift.h"
 
 namespace occupancy_fusion {
 
 struct LoopClosureCase {
+  // The mappers' settings (the shipped config files', as the benchmark reads them); resolution,
+  // the fused band and reanchoring are set per run from the fields below.
+  MappingSessionConfig mapping;
   double resolution = 0.05;  // m
   double step = 0.2;         // m between frames along the loop (5 Hz: 1 m/s)
   double laps = 1.25;        // of the 88 m loop: back at the start once, then on
@@ -48,6 +52,9 @@ struct LoopClosureQuality {
   double coverage = 0.0;          // of the scene's surface samples in the sensors' height band
   std::size_t grid_occupied = 0;  // cells of the fused 2D grid
   double grid_iou = 0.0;          // with the true-pose map's grid at the same frame
+  // The same within one cell: of both grids' occupied cells, those with one of the other's in
+  // their 3 x 3 neighbourhood (a wall one cell off counts; a wall 0.5 m off does not).
+  double grid_agreement = 0.0;
 };
 
 struct LoopClosureRun {
