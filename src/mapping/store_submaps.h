@@ -30,8 +30,8 @@ struct VoxelStoreTraits {
   using Store = VoxelMap;
   using Cells = VoxelBlock;
   using Index = Eigen::Vector3i;
-  using Stored = StoredBlock;
   static constexpr int kCellCount = VoxelBlock::kVolume;
+  using Stored = PackedLogOddsChanges<kCellCount>;
 
   static std::uint64_t key(const Index& index) { return packKey(index); }
   static Index unkey(std::uint64_t key) { return unpackKey3(key); }
@@ -47,13 +47,11 @@ struct VoxelStoreTraits {
   }
   static int side() { return VoxelBlock::kSide; }
 
-  static Stored store(const Cells& changes) {
-    StoredBlock stored = StoredBlock::newDense();
-    *stored.dense() = changes;
-    stored.settle(VoxelMap::kMaxSparseBricks);
-    return stored;
+  static Stored store(const Cells& changes) { return Stored(changes); }
+  static const Cells& view(const Stored& stored, Cells* scratch) {
+    stored.expandInto(scratch);
+    return *scratch;
   }
-  static const Cells& view(const Stored& stored, Cells* scratch) { return stored.view(scratch); }
   static std::size_t bytes(const Stored& stored) { return stored.bytes(); }
 
   static void setWriteWatcher(Store* store, CellsWriteWatcher<Index, Cells>* watcher,
@@ -75,8 +73,8 @@ struct TileStoreTraits {
   using Store = GridLayer2D;
   using Cells = GridTile;
   using Index = Eigen::Vector2i;
-  using Stored = std::unique_ptr<GridTile>;
   static constexpr int kCellCount = GridTile::kArea;
+  using Stored = PackedLogOddsChanges<kCellCount>;
 
   static std::uint64_t key(const Index& index) { return packKey(index); }
   static Index unkey(std::uint64_t key) { return unpackKey2(key); }
@@ -91,9 +89,12 @@ struct TileStoreTraits {
   }
   static int side() { return GridTile::kSide; }
 
-  static Stored store(const Cells& changes) { return std::make_unique<GridTile>(changes); }
-  static const Cells& view(const Stored& stored, Cells*) { return *stored; }
-  static std::size_t bytes(const Stored&) { return sizeof(GridTile); }
+  static Stored store(const Cells& changes) { return Stored(changes); }
+  static const Cells& view(const Stored& stored, Cells* scratch) {
+    stored.expandInto(scratch);
+    return *scratch;
+  }
+  static std::size_t bytes(const Stored& stored) { return stored.bytes(); }
 
   static void setWriteWatcher(
       Store* store, CellsWriteWatcher<Index, Cells>* watcher,
@@ -153,7 +154,7 @@ class StoreSubmaps {
       Cells after, changes;
       for (const auto& entry : active_->before) {
         if (!read(Traits::unkey(entry.first), &after)) after = Cells();
-        if (logOddsChanges(*entry.second, after, &changes) == 0) continue;
+        if (logOddsChanges(before(entry.second), after, &changes) == 0) continue;
         record.add(Traits::unkey(entry.first), Traits::store(changes), cellSide());
       }
     });
@@ -169,6 +170,11 @@ class StoreSubmaps {
   std::size_t activeBlocks() const {
     std::lock_guard<std::mutex> lock(active_->info_mutex);
     return active_->count;
+  }
+  // Memory of the active submap's record: the blocks' contents kept and a table slot each.
+  std::size_t activeBytes() const {
+    std::lock_guard<std::mutex> lock(active_->info_mutex);
+    return active_->kept * sizeof(Cells) + active_->count * kTableSlotBytes;
   }
   bool holdsContents() const { return Traits::count(*store_) > 0; }
   const Eigen::AlignedBox3d& bounds(int id) const { return records_[id].bounds; }
@@ -216,8 +222,8 @@ class StoreSubmaps {
         return;
       }
       Cells active_changes;
-      logOddsChanges(*it->second, contents, &active_changes);
-      *it.value() = sum;
+      logOddsChanges(before(it->second), contents, &active_changes);
+      it.value() = sum.known_count > 0 ? std::make_unique<Cells>(sum) : nullptr;
       contents = sum;
       addLogOddsChanges(active_changes, min, max, &contents);
     });
@@ -248,15 +254,18 @@ class StoreSubmaps {
     void beforeFirstWrite(const Index& index, const Cells* contents) override {
       auto inserted = before.try_emplace(Traits::key(index));
       if (!inserted.second) return;
-      inserted.first.value() =
-          contents != nullptr ? std::make_unique<Cells>(*contents) : std::make_unique<Cells>();
+      // Nothing kept for a block that was all unknown (most of a new submap's): nullptr.
+      const bool keep = contents != nullptr && contents->known_count > 0;
+      if (keep) inserted.first.value() = std::make_unique<Cells>(*contents);
       std::lock_guard<std::mutex> lock(info_mutex);
       ++count;
+      kept += keep ? 1 : 0;
       bounds.extend(containerBox(index, cell_side));
     }
     SpatialKeyMap<std::unique_ptr<Cells>> before;
     mutable std::mutex info_mutex;
     std::size_t count = 0;
+    std::size_t kept = 0;  // blocks' contents kept (the others were all unknown)
     Eigen::AlignedBox3d bounds;
     const double cell_side;
   };
@@ -274,7 +283,15 @@ class StoreSubmaps {
     }
   };
 
+  static constexpr std::size_t kTableSlotBytes = 24;  // a hash table entry, about
+
   double cellSide() const { return store_->resolution(); }
+
+  // An active submap's record of a block before its first write; nullptr: all unknown.
+  static const Cells& before(const std::unique_ptr<Cells>& kept) {
+    static const Cells unknown;
+    return kept ? *kept : unknown;
+  }
 
   // The map-frame box (m) of a block or tile (a tile's is flat, at z = 0).
   static Eigen::AlignedBox3d containerBox(const Index& index, double cell_side) {

@@ -225,10 +225,10 @@ std::vector<SubmapInfo> SubmapFusion::submaps() const {
   SubmapInfo& active = result.back();
   active.active = true;
   active.blocks = stores_->voxels.activeBlocks();
-  active.bytes = active.blocks * sizeof(VoxelBlock);
+  active.bytes = stores_->voxels.activeBytes();
   if (stores_->tiles) {
     active.tiles = stores_->tiles->activeBlocks();
-    active.bytes += active.tiles * sizeof(GridTile);
+    active.bytes += stores_->tiles->activeBytes();
   }
   active.bounds = activeBounds();
   return result;

@@ -4,7 +4,12 @@
 // gives the map again; NaN means the stretch left the cell as it was.
 #pragma once
 
+#include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
 
 #include "occupancy_fusion/map/log_odds_cells.h"
 
@@ -49,5 +54,50 @@ void addLogOddsChanges(const LogOddsCells<kCount>& changes, float min_log_odds, 
         i, addLogOddsChange(cells->log_odds[i], changes.log_odds[i], min_log_odds, max_log_odds));
   }
 }
+
+// A block's (tile's) changes as the submaps keep them: a bit per cell that changed and, for those
+// only, the change in steps of kStep log-odds (16 bits; |change| stays below the clamping range,
+// far inside the +-32 they hold). A block seen for the first time takes about half a dense
+// block's memory, a block seen again only its changed cells. Rounding moves a change by at most
+// kStep / 2.
+template <int kCount>
+class PackedLogOddsChanges {
+ public:
+  static constexpr float kStep = 1.0f / 1024.0f;
+
+  PackedLogOddsChanges() = default;
+  explicit PackedLogOddsChanges(const LogOddsCells<kCount>& changes) {
+    values_.reserve(static_cast<std::size_t>(changes.known_count));
+    for (int i = 0; i < kCount; ++i) {
+      const float change = changes.log_odds[i];
+      if (std::isnan(change)) continue;
+      mask_[i / 64] |= std::uint64_t{1} << (i % 64);
+      const float steps = std::round(change / kStep);
+      const float limit = std::numeric_limits<std::int16_t>::max();
+      values_.push_back(static_cast<std::int16_t>(steps < -limit  ? -limit
+                                                  : steps > limit ? limit
+                                                                  : steps));
+    }
+  }
+
+  // The changes, NaN where there is none.
+  void expandInto(LogOddsCells<kCount>* out) const {
+    out->log_odds.fill(std::numeric_limits<float>::quiet_NaN());
+    std::size_t next = 0;
+    for (int word = 0; word < kWords; ++word) {
+      for (std::uint64_t bits = mask_[word]; bits != 0; bits &= bits - 1) {
+        out->log_odds[word * 64 + __builtin_ctzll(bits)] = values_[next++] * kStep;
+      }
+    }
+    out->known_count = static_cast<int>(values_.size());
+  }
+  std::size_t changed() const { return values_.size(); }
+  std::size_t bytes() const { return sizeof(*this) + values_.capacity() * sizeof(std::int16_t); }
+
+ private:
+  static constexpr int kWords = (kCount + 63) / 64;
+  std::array<std::uint64_t, kWords> mask_{};
+  std::vector<std::int16_t> values_;
+};
 
 }  // namespace occupancy_fusion

@@ -8,12 +8,16 @@
 #include <vector>
 
 #include "occupancy_fusion/integrators/point_cloud_integrator.h"
+#include "occupancy_fusion/map/log_odds_deltas.h"
 #include "occupancy_fusion/mapping/submap_fusion.h"
 
 namespace occupancy_fusion {
 namespace {
 
 constexpr double kResolution = 0.1;
+// A submap keeps each change rounded to PackedLogOddsChanges' step: a rebuilt cell is within this
+// of the exact sum per submap that reaches it.
+constexpr float kRounding = PackedLogOddsChanges<VoxelBlock::kVolume>::kStep / 2;
 
 VoxelMapConfig mapConfig() {
   VoxelMapConfig config;
@@ -29,6 +33,15 @@ Cells knownCells(const VoxelMap& map) {
     cells[{index.x(), index.y(), index.z()}] = value;
   });
   return cells;
+}
+
+// The same cells, each value within `tolerance`.
+void expectNear(const Cells& actual, const Cells& expected, float tolerance) {
+  ASSERT_EQ(actual.size(), expected.size());
+  for (const auto& cell : expected) {
+    ASSERT_EQ(actual.count(cell.first), 1u);
+    EXPECT_NEAR(actual.at(cell.first), cell.second, tolerance);
+  }
 }
 
 std::vector<Eigen::Vector3i> occupied(const VoxelMap& map) {
@@ -82,12 +95,7 @@ TEST(SubmapFusion, MovedAndMovedBackGivesTheMapAgain) {
   EXPECT_NE(knownCells(watched), knownCells(plain));
   EXPECT_EQ(fusion.place({{1, Eigen::Isometry3d::Identity()}}).moved, 1u);
   // The changes add up to the written cells again, up to rounding.
-  const Cells expected = knownCells(plain), actual = knownCells(watched);
-  ASSERT_EQ(actual.size(), expected.size());
-  for (const auto& cell : expected) {
-    ASSERT_EQ(actual.count(cell.first), 1u);
-    EXPECT_NEAR(actual.at(cell.first), cell.second, 1e-5);
-  }
+  expectNear(knownCells(watched), knownCells(plain), 3 * kRounding);
 }
 
 TEST(SubmapFusion, AWholeVoxelShiftCarriesEveryCellOfTheSubmapExactly) {
@@ -103,7 +111,7 @@ TEST(SubmapFusion, AWholeVoxelShiftCarriesEveryCellOfTheSubmapExactly) {
     const auto& [x, y, z] = cell.first;
     expected[{x + 3, y - 2, z}] = cell.second;
   }
-  EXPECT_EQ(knownCells(map), expected);  // the old place is unknown again: no ghost
+  expectNear(knownCells(map), expected, kRounding);  // the old place is unknown again: no ghost
 }
 
 TEST(SubmapFusion, ACorrectedDriftedSubmapLandsWhereTheTruePosesPutIt) {
@@ -163,12 +171,12 @@ TEST(SubmapFusion, TheActiveSubmapsWritesStayOnTopOfARebuild) {
   EXPECT_FLOAT_EQ(*map.logOdds(mark), 1.25f);
   // The wall left; the active submap's own change of that cell stays, from the prior.
   EXPECT_NEAR(*map.logOdds(shared), -0.5f, 1e-6);
-  EXPECT_FLOAT_EQ(*map.logOdds(VoxelIndex(20, 1, 15)), wall);
+  EXPECT_NEAR(*map.logOdds(VoxelIndex(20, 1, 15)), wall, kRounding);
   // Closing it later records only its own changes: moving submap 0 back restores the wall plus
   // the active change.
   fusion.startSubmap(Eigen::Isometry3d::Identity());
   fusion.place({{0, Eigen::Isometry3d::Identity()}});
-  EXPECT_NEAR(*map.logOdds(shared), wall - 0.5f, 1e-6);
+  EXPECT_NEAR(*map.logOdds(shared), wall - 0.5f, 2 * kRounding);
   EXPECT_FLOAT_EQ(*map.logOdds(mark), 1.25f);
 }
 
@@ -269,7 +277,7 @@ TEST(SubmapFusion, AClearedBoxIsPartOfTheSubmapThatClearedIt) {
   EXPECT_EQ(map.occupancyAt({2.05, 0.05, 0.55}), Occupancy::kFree);
   const Cells rebuilt = knownCells(map);
   ASSERT_EQ(rebuilt.size(), cleared.size());
-  for (const auto& cell : cleared) EXPECT_NEAR(rebuilt.at(cell.first), cell.second, 1e-5);
+  expectNear(rebuilt, cleared, 2 * kRounding);
 }
 
 GridLayer2DConfig layerConfig() {
@@ -300,15 +308,36 @@ TEST(SubmapFusion, TheLaserLayerMovesWithTheMapsPlanarPlacement) {
   const auto moved = fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.5, 0.3, 0.0))}});
   EXPECT_EQ(moved.moved, 1u);
   // Where the wall was: submap 0's free cell from (0.55, 0.75), then submap 1's miss.
-  EXPECT_NEAR(*layer.logOdds(layer.indexOf({1.05, 1.05})), -0.8f, 1e-5);
-  EXPECT_FLOAT_EQ(*layer.logOdds(layer.indexOf({1.55, 1.35})), wall);  // 1.05 + 0.5, + 0.3
-  EXPECT_EQ(layer.occupancyAt({3.45, 1.35}), Occupancy::kOccupied);    // x 2.95 + 0.5
+  EXPECT_NEAR(*layer.logOdds(layer.indexOf({1.05, 1.05})), -0.8f, 2 * kRounding);
+  EXPECT_NEAR(*layer.logOdds(layer.indexOf({1.55, 1.35})), wall, kRounding);  // 1.05+0.5, +0.3
+  EXPECT_EQ(layer.occupancyAt({3.45, 1.35}), Occupancy::kOccupied);           // x 2.95 + 0.5
   // Submap 1's own cells stay, its wall on top of submap 0's moved free space.
   EXPECT_EQ(layer.occupancyAt({0.05, 2.55}), Occupancy::kOccupied);
   EXPECT_EQ(layer.occupancyAt({0.55, 1.05}), Occupancy::kFree);  // submap 1's free cells
   const std::vector<SubmapInfo> submaps = fusion.submaps();
   EXPECT_EQ(submaps[0].blocks, 0u);
   EXPECT_GT(submaps[0].tiles, 0u);
+}
+
+TEST(PackedLogOddsChanges, KeepsWhichCellsChangedAndEachChangeToHalfAStep) {
+  VoxelBlock changes;
+  changes.set(0, 0.8473f);
+  changes.set(7, -5.4931f);  // the whole clamping range of the defaults
+  changes.set(511, 0.0f);    // a cell that became known at the prior
+  const PackedLogOddsChanges<VoxelBlock::kVolume> packed(changes);
+  EXPECT_EQ(packed.changed(), 3u);
+  EXPECT_LT(packed.bytes(), 200u);
+  VoxelBlock out;
+  packed.expandInto(&out);
+  EXPECT_EQ(out.known_count, 3);
+  EXPECT_NEAR(out.log_odds[0], 0.8473f, kRounding);
+  EXPECT_NEAR(out.log_odds[7], -5.4931f, kRounding);
+  EXPECT_EQ(out.log_odds[511], 0.0f);
+  for (int i : {1, 6, 8, 64, 510}) EXPECT_TRUE(std::isnan(out.log_odds[i])) << i;
+  // Every cell changed: about half a dense block.
+  VoxelBlock all;
+  for (int i = 0; i < VoxelBlock::kVolume; ++i) all.set(i, -0.4f);
+  EXPECT_LT(PackedLogOddsChanges<VoxelBlock::kVolume>(all).bytes(), sizeof(VoxelBlock) * 6 / 10);
 }
 
 TEST(SubmapFusion, RejectsANegativeThreshold) {
