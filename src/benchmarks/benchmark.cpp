@@ -420,6 +420,9 @@ const std::vector<Workload>& workloads() {
        "      [--sensors depth,laser,stereo] [--evaluate_every N] [--curves CSV] [--grids PREFIX]\n"
        "      [--config FILE ...] (default: the shipped depth, laser, disparity and map server\n"
        "      configs)\n"
+       "      --carmen LOG [--carmen LOG ...] [--path_every N] [--max_scans N]: real laser logs\n"
+       "      with corrected poses instead: odometry with the seeded drift, the corrected\n"
+       "      trajectory as the path every N scans; laser layer IoU with the corrected poses'\n"
        "      a depth camera, two lasers and a stereo camera around the simulated building's\n"
        "      88 m corridor loop on drifting odometry, a graph-SLAM stand-in correcting the past\n"
        "      at loop closures; mapped without submaps, re-anchored by its path and by tf's\n"
@@ -427,7 +430,7 @@ const std::vector<Workload>& workloads() {
        "      projected_map's IoU with the true-pose map, mapper times, memory, correction time",
        {"resolution", "step", "laps", "drift_scale", "drift_seed", "closure_radius",
         "correct_every", "submap_distance", "sensors", "evaluate_every", "curves", "grids",
-        "config"},
+        "config", "carmen", "path_every", "max_scans"},
        runLoopClosure},
   };
   return table;

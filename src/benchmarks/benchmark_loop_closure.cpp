@@ -104,8 +104,33 @@ void writeCurves(const LoopClosureResult& result, const std::string& path) {
 
 }  // namespace
 
+// --carmen LOG ...: each real log, its laser layer re-anchored against its corrected poses.
+int runCarmen(const CommandLine& args, const LoopClosureCase& setup) {
+  const int path_every = args.intValue("path_every", 50);
+  const int max_scans = args.intValue("max_scans", 0);
+  if (path_every < 1 || max_scans < 0) {
+    throw UsageError("--path_every must be >= 1 and --max_scans >= 0");
+  }
+  for (const std::string& log : args.values("carmen")) {
+    std::cerr << "loop closure: " << log << "\n";
+    const CarmenReanchoringResult result =
+        evaluateCarmenReanchoring(log, setup, path_every, static_cast<std::size_t>(max_scans));
+    std::printf(
+        "loop_closure_carmen log=%s resolution=%.3f scans=%zu travel_m=%.0f largest_drift_m=%.2f "
+        "path_every=%d corrected_cells=%zu iou_without_submaps=%.3f iou_reanchored_path=%.3f "
+        "within_one_cell_without_submaps=%.3f within_one_cell_reanchored_path=%.3f "
+        "slowest_correction_ms=%.0f\n",
+        log.substr(log.find_last_of('/') + 1).c_str(), setup.resolution, result.scans,
+        result.travel, result.largest_drift, path_every, result.corrected_cells,
+        result.iou_without_submaps, result.iou_path, result.within_one_cell_without_submaps,
+        result.within_one_cell_path, 1e3 * result.slowest_correction_seconds);
+  }
+  return 0;
+}
+
 int runLoopClosure(const CommandLine& args) {
   const LoopClosureCase setup = caseFrom(args);
+  if (args.has("carmen")) return runCarmen(args, setup);
   const LoopClosureResult result = evaluateLoopClosure(
       setup, {LoopClosureMapping::kToday, LoopClosureMapping::kPath, LoopClosureMapping::kTf},
       &std::cerr);

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "occupancy_fusion/mapping/mapping_session.h"
+#include "occupancy_fusion/sensors/carmen_log.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/laser_scanner.h"
 #include "occupancy_fusion/sim/scenes.h"
@@ -372,6 +373,115 @@ LoopClosureRun mapOnce(const sim::Scene& scene, const LoopClosureCase& setup, co
 }
 
 }  // namespace
+
+namespace {
+
+// The occupied cells of a laser layer.
+SpatialKeySet occupiedLayerCells(const GridLayer2D& layer) {
+  SpatialKeySet cells;
+  layer.forEachKnownCell([&](const CellIndex& index, float value) {
+    if (layer.classify(value) == Occupancy::kOccupied) cells.insert(packKey(index));
+  });
+  return cells;
+}
+
+// Poses of a log's laser as the frames of its scans (the laser is the robot's body here).
+class LogPoses : public PoseSource {
+ public:
+  LogPoses(const std::vector<Eigen::Isometry3d>& odometry,
+           const std::vector<Eigen::Isometry3d>& map_to_odom, double rate_hz)
+      : odometry_(odometry), map_to_odom_(map_to_odom), rate_hz_(rate_hz) {}
+  std::optional<Eigen::Isometry3d> lookup(const std::string& target, const std::string& frame,
+                                          double stamp, std::string* why) const override {
+    const long k = std::lround((stamp - kStamp0) * rate_hz_);
+    if (k < 0 || k >= static_cast<long>(odometry_.size())) {
+      if (why != nullptr) *why = "no pose at that stamp";
+      return std::nullopt;
+    }
+    if (frame == "odom") return map_to_odom_[k];
+    if (target == "odom") return odometry_[k];
+    return map_to_odom_[k] * odometry_[k];
+  }
+
+ private:
+  const std::vector<Eigen::Isometry3d>& odometry_;
+  const std::vector<Eigen::Isometry3d>& map_to_odom_;
+  double rate_hz_;
+};
+
+}  // namespace
+
+CarmenReanchoringResult evaluateCarmenReanchoring(const std::string& log_path,
+                                                  const LoopClosureCase& setup, int path_every,
+                                                  std::size_t max_scans) {
+  setup.validate();
+  if (path_every < 1) throw std::invalid_argument("path_every must be >= 1");
+  CarmenReadConfig read;
+  read.max_scans = max_scans;
+  const std::vector<CarmenLaserScan> log = readCarmenLog(log_path, read);
+  CarmenReanchoringResult result;
+  result.scans = log.size();
+  std::vector<Eigen::Isometry3d> truth;
+  for (const CarmenLaserScan& scan : log) {
+    truth.push_back(Eigen::Isometry3d(Eigen::Translation3d(scan.x, scan.y, 0.0) *
+                                      Eigen::AngleAxisd(scan.theta, Eigen::Vector3d::UnitZ())));
+  }
+  const std::vector<Eigen::Isometry3d> odometry = sim::driftedOdometry(truth, setup.drift);
+  // Keyframes a metre apart; the path (the corrected poses of those so far) every path_every
+  // scans, and tf's map -> odom the correction of its newest keyframe.
+  std::vector<int> keyframes;
+  std::vector<Eigen::Isometry3d> map_to_odom;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    if (k > 0) result.travel += (truth[k].translation() - truth[k - 1].translation()).norm();
+    result.largest_drift =
+        std::max(result.largest_drift, (odometry[k].translation() - truth[k].translation()).norm());
+    if (keyframes.empty() ||
+        (truth[k].translation() - truth[keyframes.back()].translation()).norm() >= 1.0) {
+      keyframes.push_back(static_cast<int>(k));
+    }
+    const bool publishes = k % static_cast<std::size_t>(path_every) == 0;
+    map_to_odom.push_back(publishes || k == 0
+                              ? truth[keyframes.back()] * odometry[keyframes.back()].inverse()
+                              : map_to_odom.back());
+  }
+  const LogPoses poses(odometry, map_to_odom, setup.rate_hz);
+  MappingSessionConfig config = sessionConfig(setup, LoopClosureMapping::kToday);
+  MappingSession corrected(config, nullptr, nullptr), today(config, &poses, nullptr);
+  config.reanchoring.source = ReanchoringConfig::Source::kPath;
+  MappingSession reanchored(config, &poses, nullptr);
+  std::size_t next_keyframe = 0;
+  std::vector<StampedPose> path;
+  for (std::size_t k = 0; k < log.size(); ++k) {
+    LaserScanFrame frame;
+    frame.header.kind = "laser";
+    frame.header.source = "/scan";
+    frame.header.frame_id = "laser";
+    frame.header.stamp = kStamp0 + static_cast<double>(k) / setup.rate_hz;
+    frame.scan = log[k].scan;
+    today.integrate(frame);
+    reanchored.integrate(frame);
+    frame.header.T_map_sensor = truth[k];
+    corrected.integrate(frame);
+    while (next_keyframe < keyframes.size() && keyframes[next_keyframe] <= static_cast<int>(k)) {
+      const int f = keyframes[next_keyframe++];
+      path.push_back({kStamp0 + f / setup.rate_hz, truth[static_cast<std::size_t>(f)]});
+    }
+    if (k % static_cast<std::size_t>(path_every) == 0 || k + 1 == log.size()) {
+      const SubmapMoveResult moved = reanchored.onPath(path, frame.header.stamp);
+      result.slowest_correction_seconds =
+          std::max(result.slowest_correction_seconds, moved.seconds);
+    }
+  }
+  const SpatialKeySet truth_cells = occupiedLayerCells(corrected.laserLayer());
+  const SpatialKeySet today_cells = occupiedLayerCells(today.laserLayer());
+  const SpatialKeySet path_cells = occupiedLayerCells(reanchored.laserLayer());
+  result.corrected_cells = truth_cells.size();
+  result.iou_without_submaps = intersectionOverUnion(today_cells, truth_cells);
+  result.iou_path = intersectionOverUnion(path_cells, truth_cells);
+  result.within_one_cell_without_submaps = agreementWithinOneCell(today_cells, truth_cells);
+  result.within_one_cell_path = agreementWithinOneCell(path_cells, truth_cells);
+  return result;
+}
 
 void LoopClosureCase::validate() const {
   if (!(resolution > 0.0) || !(step > 0.0) || !(laps > 0.0) || !(rate_hz > 0.0)) {

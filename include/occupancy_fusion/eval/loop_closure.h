@@ -86,4 +86,22 @@ LoopClosureResult evaluateLoopClosure(const LoopClosureCase& setup,
                                       const std::vector<LoopClosureMapping>& mappings,
                                       std::ostream* progress);
 
+// A real laser log with its corrected poses (CARMEN): odometry made from the corrected poses with
+// the case's seeded drift, and the corrected trajectory published as the SLAM path every
+// `path_every` scans (keyframes a metre apart). The laser layer mapped without submaps (each scan
+// placed by the correction of the last path), re-anchored by the path, and with the corrected
+// poses; the occupied cells of each against the corrected-pose layer's.
+struct CarmenReanchoringResult {
+  std::size_t scans = 0;
+  double travel = 0.0;              // m, of the corrected trajectory
+  double largest_drift = 0.0;       // m, the odometry's largest error
+  std::size_t corrected_cells = 0;  // occupied cells of the corrected-pose layer
+  double iou_without_submaps = 0.0, iou_path = 0.0;
+  double within_one_cell_without_submaps = 0.0, within_one_cell_path = 0.0;
+  double slowest_correction_seconds = 0.0;
+};
+CarmenReanchoringResult evaluateCarmenReanchoring(const std::string& log_path,
+                                                  const LoopClosureCase& setup, int path_every,
+                                                  std::size_t max_scans);
+
 }  // namespace occupancy_fusion
