@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <nav_msgs/Path.h>
 #include <ros/time.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -106,6 +107,15 @@ struct CollectingConsumer : FrameConsumer {
   void onDisparityImage(const DisparityFrame& frame) override { disparity.push_back(frame); }
   void onLaserScan(const LaserScanFrame& frame) override { scans.push_back(frame); }
   void onUnreadable(const FrameHeader&, const std::string& why) override { errors.push_back(why); }
+  void onTrajectory(const std::vector<StampedPose>& keyframes, double stamp) override {
+    trajectories.push_back({stamp, keyframes, clouds.size()});
+  }
+  struct Trajectory {
+    double stamp;
+    std::vector<StampedPose> keyframes;
+    std::size_t clouds_before;  // frames delivered before it
+  };
+  std::vector<Trajectory> trajectories;
   std::vector<PointCloudFrame> clouds;
   std::vector<DepthImageFrame> depth;
   std::vector<DisparityFrame> disparity;
@@ -164,6 +174,58 @@ TEST_F(SimulatedBagTest, PointsTransformedWithTheTfPoseLieOnTheScene) {
   for (const Eigen::Vector3f& point : frame.points) {
     ASSERT_LT(scene.distanceToSurface(*pose * point.cast<double>()), 1e-4);
   }
+}
+
+// A SLAM system's path (--path-topic) comes to the consumer in time order with the frames, each
+// keyframe with its own stamp and pose; it is never read unless asked for, and does not count as
+// a frame.
+TEST_F(SimulatedBagTest, PathMessagesReachTheConsumerBetweenTheFrames) {
+  const fs::path bag_path = dir_ / "with_path.bag";
+  fs::copy_file(dir_ / "room.bag", bag_path, fs::copy_options::overwrite_existing);
+  const double between = config_.start_time + 1.25 / config_.rate_hz;  // after frames 0 and 1
+  {
+    rosbag::Bag bag(bag_path.string(), rosbag::bagmode::Append);
+    nav_msgs::Path path;
+    path.header.frame_id = "map";
+    path.header.stamp = ros::Time(between);
+    for (int k = 0; k < 2; ++k) {
+      geometry_msgs::PoseStamped pose;
+      pose.header.frame_id = "map";
+      pose.header.stamp = ros::Time(config_.start_time + k / config_.rate_hz);
+      pose.pose.position.x = 1.5 * k;
+      pose.pose.orientation.z = std::sin(0.25);  // 0.5 rad about z
+      pose.pose.orientation.w = std::cos(0.25);
+      path.poses.push_back(pose);
+    }
+    bag.write("/slam/path", ros::Time(between), path);
+  }
+  RosbagTopics topics;
+  topics.clouds = {"/cloud_in"};
+  topics.paths = {"/slam/path"};
+  RosbagReader reader({bag_path.string()}, topics);
+  EXPECT_EQ(reader.frameCount(), 4u);
+  CollectingConsumer consumer;
+  std::size_t progress = 0;
+  reader.read(&consumer, [&](std::size_t done) { progress = done; });
+  EXPECT_EQ(progress, 4u);
+  ASSERT_EQ(consumer.trajectories.size(), 1u);
+  const CollectingConsumer::Trajectory& path = consumer.trajectories[0];
+  EXPECT_DOUBLE_EQ(path.stamp, between);
+  EXPECT_EQ(path.clouds_before, 2u);
+  ASSERT_EQ(path.keyframes.size(), 2u);
+  EXPECT_NEAR(path.keyframes[1].stamp, config_.start_time + 1.0 / config_.rate_hz, 1e-6);
+  EXPECT_NEAR(path.keyframes[1].pose.translation().x(), 1.5, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(path.keyframes[1].pose.linear()).angle(), 0.5, 1e-9);
+
+  // Without asking for it: no path.
+  RosbagReader clouds_only({bag_path.string()}, RosbagTopics{{"/cloud_in"}, {}, {}, {}, {}});
+  CollectingConsumer other;
+  clouds_only.read(&other, {});
+  EXPECT_TRUE(other.trajectories.empty());
+  // A path topic the bags do not hold is an error naming it.
+  RosbagTopics missing = topics;
+  missing.paths = {"/mapPath"};
+  EXPECT_THROW(RosbagReader({bag_path.string()}, missing), std::invalid_argument);
 }
 
 TEST_F(SimulatedBagTest, ReaderRejectsMissingTopicsAndFiles) {
