@@ -7,37 +7,12 @@
 #include <string>
 #include <variant>
 
+#include "../../common/map_parameter_source.h"
+
 namespace occupancy_fusion {
 namespace {
 
-// A flat key -> value source; get() with the wrong type throws as the real sources do.
-class MapSource : public ParameterSource {
- public:
-  using Value = std::variant<double, int, bool, std::string, std::vector<std::string>>;
-  explicit MapSource(std::map<std::string, Value> values) : values_(std::move(values)) {}
-
-  bool get(const std::string& key, double* value) const override { return read(key, value); }
-  bool get(const std::string& key, int* value) const override { return read(key, value); }
-  bool get(const std::string& key, bool* value) const override { return read(key, value); }
-  bool get(const std::string& key, std::string* value) const override { return read(key, value); }
-  bool get(const std::string& key, std::vector<std::string>* value) const override {
-    return read(key, value);
-  }
-  bool get(const std::string&, std::vector<double>*) const override { return false; }
-
- private:
-  template <typename T>
-  bool read(const std::string& key, T* value) const {
-    const auto found = values_.find(key);
-    if (found == values_.end()) return false;
-    if (const T* typed = std::get_if<T>(&found->second)) {
-      *value = *typed;
-      return true;
-    }
-    throw std::invalid_argument(key + " has the wrong type");
-  }
-  std::map<std::string, Value> values_;
-};
+using MapSource = MapParameterSource;
 
 std::string errorOf(const MapSource& source) {
   try {
