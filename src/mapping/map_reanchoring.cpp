@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 
 namespace occupancy_fusion {
@@ -174,6 +175,50 @@ ReanchoringStatistics MapReanchoring::statistics() const {
 std::size_t MapReanchoring::odometryPoses() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return odometry_.size();
+}
+
+namespace {
+
+void writePoses(std::ostream& out, const std::vector<StampedPose>& poses) {
+  const std::uint64_t count = poses.size();
+  out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+  for (const StampedPose& pose : poses) {
+    out.write(reinterpret_cast<const char*>(&pose.stamp), sizeof(pose.stamp));
+    out.write(reinterpret_cast<const char*>(pose.pose.matrix().data()), 16 * sizeof(double));
+  }
+}
+
+std::vector<StampedPose> readPoses(std::istream& in) {
+  std::uint64_t count = 0;
+  in.read(reinterpret_cast<char*>(&count), sizeof(count));
+  std::vector<StampedPose> poses;
+  for (std::uint64_t i = 0; in && i < count; ++i) {
+    StampedPose pose;
+    in.read(reinterpret_cast<char*>(&pose.stamp), sizeof(pose.stamp));
+    in.read(reinterpret_cast<char*>(pose.pose.matrix().data()), 16 * sizeof(double));
+    poses.push_back(pose);
+  }
+  if (!in) throw std::runtime_error("submaps: the odometry ends early");
+  return poses;
+}
+
+}  // namespace
+
+void MapReanchoring::save(std::ostream& out) {
+  fusion_.save(out);
+  std::lock_guard<std::mutex> lock(mutex_);
+  writePoses(out, odometry_.poses());
+  writePoses(out, map_to_odom_);
+}
+
+void MapReanchoring::restore(std::istream& in) {
+  fusion_.restore(in);
+  std::vector<StampedPose> odometry = readPoses(in), map_to_odom = readPoses(in);
+  std::lock_guard<std::mutex> lock(mutex_);
+  odometry_.clear();
+  for (const StampedPose& pose : odometry) odometry_.add(pose.stamp, pose.pose);
+  map_to_odom_ = std::move(map_to_odom);
+  started_ = false;  // the next frame starts a submap where it is
 }
 
 void MapReanchoring::reset() {

@@ -4,6 +4,7 @@
 #include <ostream>
 #include <stdexcept>
 
+#include "occupancy_fusion/mapping/submap_files.h"
 #include "occupancy_fusion/params/config_readers.h"
 #include "occupancy_fusion/params/depth_config_reader.h"
 #include "occupancy_fusion/params/laser_config_reader.h"
@@ -209,7 +210,9 @@ FrameOutcome MappingSession::integrate(const LaserScanFrame& frame) {
 
 ResumedMap MappingSession::resumeFrom(const std::string& path) {
   ResumedMap resumed = resumeSavedMap(path, voxels_, layer_);
-  if (reanchoring_ != nullptr) reanchoring_->fusion().fixWrittenSoFar();
+  if (reanchoring_ != nullptr && !readSubmapFile(reanchoring_, submapFilePath(path))) {
+    reanchoring_->fusion().fixWrittenSoFar();
+  }
   return resumed;
 }
 

@@ -11,9 +11,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <istream>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <ostream>
 #include <utility>
 #include <vector>
 
@@ -229,6 +231,38 @@ class StoreSubmaps {
     });
   }
 
+  // The records as bytes (host order), and back: readRecords replaces every record and the active
+  // submap's sights (the store holds what the records add up to, e.g. a map just loaded); cover()
+  // then places each. false: the bytes are not what writeRecords writes.
+  void writeRecords(std::ostream& out) const {
+    writeValue(out, static_cast<std::uint64_t>(records_.size()));
+    for (const Record& record : records_) {
+      writeValue(out, static_cast<std::uint64_t>(record.changes.size()));
+      for (const auto& entry : record.changes) {
+        writeValue(out, entry.first);
+        entry.second.writeTo(out);
+      }
+    }
+  }
+  bool readRecords(std::istream& in, std::size_t expected) {
+    std::uint64_t count = 0;
+    if (!readValue(in, &count) || count != expected) return false;
+    std::deque<Record> records(count);
+    for (Record& record : records) {
+      std::uint64_t blocks = 0;
+      if (!readValue(in, &blocks)) return false;
+      for (std::uint64_t i = 0; i < blocks; ++i) {
+        std::uint64_t key = 0;
+        typename Traits::Stored stored;
+        if (!readValue(in, &key) || !stored.readFrom(in)) return false;
+        record.add(Traits::unkey(key), std::move(stored), cellSide());
+      }
+    }
+    reset();
+    records_ = std::move(records);
+    return true;
+  }
+
   // Forgets every submap and the active one's sights (the store itself is reset by the caller).
   void reset() {
     auto next = std::make_unique<ActiveWrites>(cellSide());
@@ -284,6 +318,16 @@ class StoreSubmaps {
   };
 
   static constexpr std::size_t kTableSlotBytes = 24;  // a hash table entry, about
+
+  template <class T>
+  static void writeValue(std::ostream& out, const T& value) {
+    out.write(reinterpret_cast<const char*>(&value), sizeof(value));
+  }
+  template <class T>
+  static bool readValue(std::istream& in, T* value) {
+    in.read(reinterpret_cast<char*>(value), sizeof(*value));
+    return static_cast<bool>(in);
+  }
 
   double cellSide() const { return store_->resolution(); }
 

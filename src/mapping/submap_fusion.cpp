@@ -247,6 +247,120 @@ std::size_t SubmapFusion::memoryBytes() const {
   return bytes;
 }
 
+namespace {
+
+constexpr char kSubmapMagic[8] = {'O', 'F', 'S', 'U', 'B', 'M', 'P', '1'};
+
+template <class T>
+void writeValue(std::ostream& out, const T& value) {
+  out.write(reinterpret_cast<const char*>(&value), sizeof(value));
+}
+template <class T>
+T readValue(std::istream& in) {
+  T value{};
+  in.read(reinterpret_cast<char*>(&value), sizeof(value));
+  if (!in) throw std::runtime_error("submaps: the file ends early");
+  return value;
+}
+void writePose(std::ostream& out, const Eigen::Isometry3d& pose) {
+  out.write(reinterpret_cast<const char*>(pose.matrix().data()), 16 * sizeof(double));
+}
+Eigen::Isometry3d readPose(std::istream& in) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  in.read(reinterpret_cast<char*>(pose.matrix().data()), 16 * sizeof(double));
+  if (!in || !pose.matrix().allFinite()) throw std::runtime_error("submaps: a bad placement");
+  return pose;
+}
+
+}  // namespace
+
+void SubmapFusion::save(std::ostream& out) {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (activeBlocks() > 0) closeActiveLocked(active_.written);
+  out.write(kSubmapMagic, sizeof(kSubmapMagic));
+  writeValue(out, map_->resolution());
+  writeValue(out, static_cast<std::uint8_t>(stores_->tiles ? 1 : 0));
+  writeValue(out, static_cast<std::uint64_t>(closed_.size()));
+  for (const Meta& meta : closed_) {
+    writeValue(out, static_cast<std::uint8_t>(meta.fixed ? 1 : 0));
+    writeValue(out, meta.start);
+    writeValue(out, meta.end);
+    writePose(out, meta.written);
+    writePose(out, meta.placed);
+  }
+  writePose(out, active_.written);
+  stores_->forEach([&](const auto& store) { store.writeRecords(out); });
+}
+
+void SubmapFusion::restore(std::istream& in) {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    restoreLocked(in);
+  } catch (const std::runtime_error&) {
+    fixContentsLocked();
+    throw;
+  }
+}
+
+void SubmapFusion::restoreLocked(std::istream& in) {
+  char magic[sizeof(kSubmapMagic)] = {};
+  in.read(magic, sizeof(magic));
+  if (!in || !std::equal(magic, magic + sizeof(magic), kSubmapMagic)) {
+    throw std::runtime_error("submaps: not a submaps file of this version");
+  }
+  const double resolution = readValue<double>(in);
+  if (std::abs(resolution - map_->resolution()) > 1e-9 * map_->resolution()) {
+    throw std::runtime_error("submaps: saved at resolution " + std::to_string(resolution) +
+                             " m, the map's is " + std::to_string(map_->resolution()) + " m");
+  }
+  if ((readValue<std::uint8_t>(in) != 0) != static_cast<bool>(stores_->tiles)) {
+    throw std::runtime_error("submaps: saved with and restored without a laser layer, or back");
+  }
+  std::vector<Meta> metas(readValue<std::uint64_t>(in));
+  for (std::size_t id = 0; id < metas.size(); ++id) {
+    Meta& meta = metas[id];
+    meta.id = static_cast<int>(id);
+    meta.fixed = readValue<std::uint8_t>(in) != 0;
+    meta.start = readValue<double>(in);
+    meta.end = readValue<double>(in);
+    meta.written = readPose(in);
+    meta.placed = readPose(in);
+  }
+  const Eigen::Isometry3d next = readPose(in);
+  bool read = stores_->voxels.readRecords(in, metas.size());
+  if (read && stores_->tiles) read = stores_->tiles->readRecords(in, metas.size());
+  if (!read) throw std::runtime_error("submaps: damaged changes");
+  std::lock_guard<std::mutex> stamps(stamp_mutex_);
+  closed_ = std::move(metas);
+  for (const Meta& meta : closed_) {
+    stores_->forEach([&](auto& store) { store.cover(meta.id, {meta.written, meta.placed}); });
+  }
+  active_ = Meta();
+  active_.id = static_cast<int>(closed_.size());
+  active_.written = active_.placed = next;
+}
+
+void SubmapFusion::fixContentsLocked() {
+  const Eigen::Isometry3d written = active_.written;
+  stores_->forEach([](auto& store) { store.reset(); });
+  std::lock_guard<std::mutex> stamps(stamp_mutex_);
+  closed_.clear();
+  bool held = stores_->voxels.holdsContents();
+  if (stores_->tiles) held = held || stores_->tiles->holdsContents();
+  if (held) {
+    stores_->forEach([](auto& store) { store.adoptExistingContents(); });
+    Meta fixed;
+    fixed.fixed = true;
+    closed_.push_back(fixed);
+    stores_->forEach([](auto& store) { store.cover(0, SubmapPlacement()); });
+  }
+  active_ = Meta();
+  active_.id = static_cast<int>(closed_.size());
+  active_.written = active_.placed = written;
+}
+
 void SubmapFusion::reset() {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);

@@ -14,6 +14,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "occupancy_fusion/map/saved_map.h"
+#include "occupancy_fusion/mapping/submap_files.h"
 #include "occupancy_fusion/ros/keyframe_path.h"
 #include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/ros/ros_parameter_source.h"
@@ -116,7 +117,7 @@ class MapServer : public nodelet::Nodelet {
   void startReanchoring(SharedMap* map) {
     MapReanchoring* reanchoring = map->reanchoring();
     if (reanchoring == nullptr) return;
-    if (!persistence_.load_map.empty()) reanchoring->fusion().fixWrittenSoFar();
+    if (!persistence_.load_map.empty()) resumeSubmaps(reanchoring);
     const ReanchoringConfig& config = reanchoring->config();
     NODELET_INFO(
         "map '%s' follows its localisation (reanchoring/source %s): frames placed by "
@@ -126,6 +127,25 @@ class MapServer : public nodelet::Nodelet {
     if (config.source != ReanchoringConfig::Source::kPath) return;
     path_subscriber_ =
         getNodeHandle().subscribe(persistence_.path_topic, 1, &MapServer::onPath, this);
+  }
+
+  // The submaps saved beside the loaded map, so that it moves with later corrections; without
+  // them (or when they cannot be read) the loaded map stays where it is.
+  void resumeSubmaps(MapReanchoring* reanchoring) {
+    const std::string path = submapFilePath(persistence_.load_map);
+    try {
+      if (readSubmapFile(reanchoring, path)) {
+        NODELET_INFO(
+            "load_map: %zu submaps resumed from %s: the loaded map follows later "
+            "corrections",
+            reanchoring->fusion().submaps().size() - 1, path.c_str());
+        return;
+      }
+      reanchoring->fusion().fixWrittenSoFar();
+      NODELET_INFO("load_map: no %s beside it: the loaded map stays where it is", path.c_str());
+    } catch (const std::runtime_error& error) {
+      NODELET_WARN("load_map: %s; the loaded map stays where it is", error.what());
+    }
   }
 
   void onPath(const nav_msgs::Path::ConstPtr& path) {

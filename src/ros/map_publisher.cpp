@@ -1,5 +1,7 @@
 #include "occupancy_fusion/ros/map_publisher.h"
 
+#include "occupancy_fusion/mapping/submap_files.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -438,7 +440,7 @@ bool MapPublisher::onSaveMap(SaveMap::Request& request, SaveMap::Response& respo
   return true;
 }
 
-void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
+void saveMapFiles(SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
                   std::vector<std::string>* written, MapLockStatistics* lock_statistics) {
   MapSaveOptions options;
   options.band = grid;
@@ -452,6 +454,11 @@ void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::
         "saving map '%s': %zu voxels lie outside OctoMap's 16-bit key range and are not in "
         "the .ot/.bt files",
         map.name().c_str(), saved.octomap_skipped_voxels);
+  }
+  if (map.reanchoring() != nullptr) {
+    const std::string path = submapFilePath(prefix);
+    writeSubmapFile(map.reanchoring(), path);
+    written->push_back(path);
   }
 }
 

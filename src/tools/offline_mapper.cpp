@@ -18,6 +18,7 @@
 
 #include "occupancy_fusion/mapping/map_saving.h"
 #include "occupancy_fusion/mapping/mapping_session.h"
+#include "occupancy_fusion/mapping/submap_files.h"
 #include "occupancy_fusion/tools/command_line.h"
 #include "occupancy_fusion/tools/file_readers.h"
 #include "occupancy_fusion/tools/map_outputs.h"
@@ -503,10 +504,13 @@ int run(int argc, char** argv) {
     MapSaveOptions save;
     save.band = mapper.config().fused_grid;
     save.inspection_files = true;
-    outputs.saved =
-        saveMap(mapper.map(), mapper.laserLayer(),
-                (std::filesystem::path(setup.options.output_dir) / setup.options.name).string(),
-                save, &outputs.files);
+    const std::string prefix =
+        (std::filesystem::path(setup.options.output_dir) / setup.options.name).string();
+    outputs.saved = saveMap(mapper.map(), mapper.laserLayer(), prefix, save, &outputs.files);
+    if (mapper.reanchoring() != nullptr) {
+      writeSubmapFile(mapper.reanchoring(), submapFilePath(prefix));
+      outputs.files.push_back(submapFilePath(prefix));
+    }
   }
   writeVoxelPicture(mapper.map(), setup.options, &outputs);
   printSummary(setup.readers, mapper, outputs, progress.elapsedSeconds());

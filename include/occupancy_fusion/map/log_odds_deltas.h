@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <istream>
 #include <limits>
+#include <ostream>
 #include <vector>
 
 #include "occupancy_fusion/map/log_odds_cells.h"
@@ -92,6 +94,27 @@ class PackedLogOddsChanges {
     out->known_count = static_cast<int>(values_.size());
   }
   std::size_t changed() const { return values_.size(); }
+  // As bytes (host order: files of this machine's kind): the mask, the count, the values.
+  void writeTo(std::ostream& out) const {
+    out.write(reinterpret_cast<const char*>(mask_.data()), sizeof(mask_));
+    const std::uint32_t count = static_cast<std::uint32_t>(values_.size());
+    out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+    out.write(reinterpret_cast<const char*>(values_.data()),
+              static_cast<std::streamsize>(count * sizeof(std::int16_t)));
+  }
+  // What writeTo wrote; false (the stream failed, or the count does not match the mask) otherwise.
+  bool readFrom(std::istream& in) {
+    std::uint32_t count = 0;
+    in.read(reinterpret_cast<char*>(mask_.data()), sizeof(mask_));
+    in.read(reinterpret_cast<char*>(&count), sizeof(count));
+    std::size_t bits = 0;
+    for (std::uint64_t word : mask_) bits += static_cast<std::size_t>(__builtin_popcountll(word));
+    if (!in || bits != count) return false;
+    values_.resize(count);
+    in.read(reinterpret_cast<char*>(values_.data()),
+            static_cast<std::streamsize>(count * sizeof(std::int16_t)));
+    return static_cast<bool>(in);
+  }
   std::size_t bytes() const { return sizeof(*this) + values_.capacity() * sizeof(std::int16_t); }
 
  private:

@@ -18,8 +18,10 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <istream>
 #include <mutex>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -92,6 +94,12 @@ class MapReanchoring {
   const SubmapFusion& fusion() const { return fusion_; }
   ReanchoringStatistics statistics() const;
   std::size_t odometryPoses() const;
+  // The submaps, the odometry and the corrections heard, as bytes (submap_files.h), and back once
+  // the map holds what was saved with them. restore throws std::runtime_error for bytes that are
+  // not such a save (the map's contents then stay where they are, as one fixed submap).
+  void save(std::ostream& out);
+  void restore(std::istream& in);
+
   // Forgets the submaps, the odometry and empties the map (the map server's reset).
   void reset();
 

@@ -196,7 +196,8 @@ class MappingSession : public FrameConsumer {
 
   // Starts from a saved map (a .ot or .bt and the laser layer files beside it; see saved_map.h),
   // before the first frame. Throws std::runtime_error naming the file and what is wrong.
-  // With reanchoring the resumed map is fixed where it is (it has no trajectory to follow).
+  // With reanchoring, the submaps saved beside it (<prefix>.submaps, submap_files.h) come back
+  // too; without that file the resumed map is fixed where it is.
   ResumedMap resumeFrom(const std::string& path);
 
  private:

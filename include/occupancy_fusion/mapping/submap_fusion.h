@@ -21,9 +21,11 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <istream>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <ostream>
 #include <shared_mutex>
 #include <utility>
 #include <vector>
@@ -119,6 +121,14 @@ class SubmapFusion {
   double minShift() const { return min_shift_; }  // m, config().min_shift or one voxel
   std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
 
+  // The submaps as bytes, to be saved beside the map (submap_files.h): the active submap is closed
+  // first. restore() takes them back once the map and layer hold what was saved with them (their
+  // sum): the submaps then move again with later corrections. Throws std::runtime_error when
+  // the bytes are not a save of this map's kind (resolution, laser layer); the fusion then holds
+  // the map's contents as one fixed submap.
+  void save(std::ostream& out);
+  void restore(std::istream& in);
+
   // Empties the map and layer and forgets every submap (the map server's reset).
   void reset();
 
@@ -135,6 +145,8 @@ class SubmapFusion {
 
   // By value: callers pass the active submap's own placement, which closing it replaces.
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
+  void restoreLocked(std::istream& in);
+  void fixContentsLocked();  // the map's contents become one fixed submap, nothing else
   // The active submap shown at `placed`; frames from now on written at `next`.
   void placeActiveLocked(const Eigen::Isometry3d& placed, const Eigen::Isometry3d& next);
   Eigen::AlignedBox3d boundsOf(int id) const;

@@ -37,7 +37,7 @@ MapPublisherConfig readMapPublisherConfig(const ParameterSource& source);
 // the errors), in the height band `grid`, warning about voxels OctoMap's keys cannot hold.
 // `lock_statistics`, if given, records how long each read of the map took.
 class MapLockStatistics;
-void saveMapFiles(const SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
+void saveMapFiles(SharedMap& map, const FusedGridConfig& grid, const std::string& prefix,
                   std::vector<std::string>* written, MapLockStatistics* lock_statistics = nullptr);
 
 // Wall time (ms) of the parts of the last publishing cycle, and what they handled. Outputs

@@ -5,15 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/mapping/map_saving.h"
 #include "occupancy_fusion/mapping/mapping_session.h"
+#include "occupancy_fusion/mapping/submap_files.h"
 #include "occupancy_fusion/sim/depth_camera.h"
 #include "occupancy_fusion/sim/laser_scanner.h"
 #include "occupancy_fusion/sim/scenes.h"
 #include "occupancy_fusion/sim/trajectory.h"
+
+#include "../../common/test_folder.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -233,6 +238,42 @@ TEST_F(MapReanchoringDrive, APathOfTrueKeyframesGivesTheTrueMap) {
   EXPECT_GT(ours.layer_genuine, 0.97);
   EXPECT_GT(ours.layer_coverage, 0.97);
   EXPECT_GE(session.reanchoring()->statistics().corrections, 3u);
+}
+
+// Mapped before a restart, saved with its submaps, resumed: the first correction after the
+// restart moves what was mapped before it, as it does in a session that never stopped.
+TEST_F(MapReanchoringDrive, ASavedAndResumedMapFollowsTheNextCorrection) {
+  const TemporaryFolder folder("reanchoring_resume");
+  const MappingSessionConfig config = sessionConfig(ReanchoringConfig::Source::kPath);
+  MappingSession before(config, &poses(), nullptr);
+  std::vector<StampedPose> path;
+  for (int k = 0; k < kFrames / 2; ++k) {
+    feed(drive(), k, false, &before);
+    if (k % 4 == 0) path.push_back({drive().stamp(k), drive().truth[k]});
+  }
+  const std::string prefix = folder.path("map");
+  std::vector<std::string> files;
+  saveMap(before.map(), before.laserLayer(), prefix, MapSaveOptions(), &files);
+  writeSubmapFile(before.reanchoring(), submapFilePath(prefix));
+
+  MappingSession resumed(config, &poses(), nullptr);
+  resumed.resumeFrom(prefix + ".ot");
+  const std::size_t submaps = resumed.reanchoring()->fusion().submaps().size();
+  EXPECT_EQ(submaps, before.reanchoring()->fusion().submaps().size());
+  EXPECT_FALSE(resumed.reanchoring()->fusion().submaps()[0].fixed);
+  EXPECT_EQ(resumed.reanchoring()->odometryPoses(), before.reanchoring()->odometryPoses());
+
+  EXPECT_GE(before.onPath(path, drive().stamp(kFrames / 2)).moved, 1u);
+  EXPECT_GE(resumed.onPath(path, drive().stamp(kFrames / 2)).moved, 1u);
+  EXPECT_GT(matchedVoxels(resumed.map(), before.map()), 0.99);
+  EXPECT_GT(matchedVoxels(before.map(), resumed.map()), 0.99);
+  EXPECT_GT(matchedCells(resumed.laserLayer(), before.laserLayer()), 0.99);
+  // Without the submaps file the resumed map stays where it was mapped.
+  std::filesystem::remove(submapFilePath(prefix));
+  MappingSession fixed(config, &poses(), nullptr);
+  fixed.resumeFrom(prefix + ".ot");
+  EXPECT_TRUE(fixed.reanchoring()->fusion().submaps()[0].fixed);
+  EXPECT_EQ(fixed.onPath(path, drive().stamp(kFrames / 2)).moved, 0u);
 }
 
 TEST_F(MapReanchoringDrive, WithoutCorrectionsTheMapIsTodaysVoxelForVoxel) {

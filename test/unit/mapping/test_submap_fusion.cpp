@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -317,6 +318,74 @@ TEST(SubmapFusion, TheLaserLayerMovesWithTheMapsPlanarPlacement) {
   const std::vector<SubmapInfo> submaps = fusion.submaps();
   EXPECT_EQ(submaps[0].blocks, 0u);
   EXPECT_GT(submaps[0].tiles, 0u);
+}
+
+// A map saved with its submaps and loaded elsewhere moves with a later correction as the original
+// does.
+TEST(SubmapFusion, SavedSubmapsMoveTheLoadedMapAsTheyMovedTheOriginal) {
+  VoxelMap original(mapConfig());
+  GridLayer2D original_layer(layerConfig());
+  SubmapFusion fusion(&original, &original_layer, SubmapFusionConfig());
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &original);
+  scanWall(1.0, &original_layer);
+  fusion.startSubmap(Eigen::Isometry3d::Identity());
+  seeWall(3.0, Eigen::Vector3d(0.5, 0, 0.5), {}, &original);
+  std::stringstream saved;
+  fusion.save(saved);  // closes submap 1
+  EXPECT_EQ(fusion.submaps().size(), 3u);
+
+  // The map as a file holds it (every voxel and cell as it is), then the submaps.
+  VoxelMap loaded(mapConfig());
+  GridLayer2D loaded_layer(layerConfig());
+  original.forEachKnownVoxel(
+      [&](const VoxelIndex& index, float value) { loaded.setLogOdds(index, value); });
+  loaded_layer.importRaster(original_layer.toLogOddsRaster());
+  SubmapFusion resumed(&loaded, &loaded_layer, SubmapFusionConfig());
+  EXPECT_TRUE(resumed.submaps()[0].fixed);  // before the submaps are read: all fixed
+  resumed.restore(saved);
+  ASSERT_EQ(resumed.submaps().size(), 3u);
+  EXPECT_FALSE(resumed.submaps()[0].fixed);
+  EXPECT_GT(resumed.submaps()[0].tiles, 0u);
+
+  const Eigen::Isometry3d correction(Eigen::Translation3d(0.3, -0.2, 0.0) *
+                                     Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitZ()));
+  EXPECT_EQ(fusion.place({{0, correction}}).moved, 1u);
+  EXPECT_EQ(resumed.place({{0, correction}}).moved, 1u);
+  expectNear(knownCells(loaded), knownCells(original), 2 * kRounding);
+  const LogOddsRaster a = original_layer.toLogOddsRaster(), b = loaded_layer.toLogOddsRaster();
+  ASSERT_EQ(a.data.size(), b.data.size());
+  for (std::size_t i = 0; i < a.data.size(); ++i) {
+    if (std::isnan(a.data[i])) {
+      EXPECT_TRUE(std::isnan(b.data[i]));
+    } else {
+      EXPECT_NEAR(a.data[i], b.data[i], 2 * kRounding);
+    }
+  }
+}
+
+TEST(SubmapFusion, DamagedSubmapsLeaveTheLoadedMapInPlace) {
+  VoxelMap map(mapConfig());
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
+  seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
+  std::stringstream saved;
+  fusion.save(saved);
+  const std::string bytes = saved.str();
+  VoxelMap coarse([] {
+    VoxelMapConfig config = mapConfig();
+    config.resolution = 0.2;
+    return config;
+  }());
+  coarse.updateVoxel(VoxelIndex(1, 1, 1), 1.0f);
+  SubmapFusion coarse_fusion(&coarse, nullptr, SubmapFusionConfig());
+  std::stringstream wrong_resolution(bytes);
+  EXPECT_THROW(coarse_fusion.restore(wrong_resolution), std::runtime_error);
+  std::stringstream cut(bytes.substr(0, bytes.size() / 2));
+  EXPECT_THROW(coarse_fusion.restore(cut), std::runtime_error);
+  const std::vector<SubmapInfo> submaps = coarse_fusion.submaps();
+  ASSERT_EQ(submaps.size(), 2u);  // the map's contents, fixed, and the active submap
+  EXPECT_TRUE(submaps[0].fixed);
+  coarse_fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(1.0, 0, 0))}});
+  EXPECT_FLOAT_EQ(*coarse.logOdds(VoxelIndex(1, 1, 1)), 1.0f);
 }
 
 TEST(PackedLogOddsChanges, KeepsWhichCellsChangedAndEachChangeToHalfAStep) {
