@@ -2,6 +2,7 @@
 
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -55,6 +56,9 @@ std::runtime_error MapCheckpoints::damagedTile(std::uint64_t key, std::size_t si
                             std::to_string(size) + " bytes)");
 }
 
+const std::uint64_t MapCheckpoints::kCompanionKey =
+    packKey(TileIndex(std::numeric_limits<std::int32_t>::min(), 0));
+
 GridLayer2DConfig laserLayerConfig(const VoxelMapConfig& map) {
   GridLayer2DConfig layer;
   layer.resolution = map.resolution;
@@ -81,7 +85,11 @@ MapCheckpoints::MapCheckpoints(VoxelMap* voxels, GridLayer2D* layer)
   // map's exclusive lock, and the keys are a small fraction of the tiles' bytes.
   std::vector<std::uint64_t> keys;
   voxels_->forEachResumedLayerRecord(
-      [&](std::uint64_t key, const unsigned char* /*bytes*/, std::size_t size) {
+      [&](std::uint64_t key, const unsigned char* bytes, std::size_t size) {
+        if (key == kCompanionKey) {
+          resumed_companion_.assign(bytes, bytes + size);
+          return;
+        }
         if (size != kTileBytes) throw damagedTile(key, size);
         keys.push_back(key);
       });
@@ -101,8 +109,10 @@ MapCheckpoints::MapCheckpoints(VoxelMap* voxels, GridLayer2D* layer)
   layer_version_ = layer_->version();
 }
 
-CheckpointResult MapCheckpoints::checkpoint(const std::string& stamp) {
+CheckpointResult MapCheckpoints::checkpoint(const std::string& stamp,
+                                            const std::vector<unsigned char>* companion) {
   BlockStore::LayerRecords records;
+  if (companion != nullptr) records.records.push_back({kCompanionKey, *companion});
   CheckpointResult result;
   // Under the layer's lock from collecting its tiles to the transaction: no tile changes or
   // leaves memory for the store in between.

@@ -204,11 +204,15 @@ std::vector<StampedPose> readPoses(std::istream& in) {
 
 }  // namespace
 
-void MapReanchoring::save(std::ostream& out) {
-  fusion_.save(out);
-  std::lock_guard<std::mutex> lock(mutex_);
-  writePoses(out, odometry_.poses());
-  writePoses(out, map_to_odom_);
+void MapReanchoring::saveThen(std::ostream& out, const std::function<void()>& then) {
+  fusion_.saveThen(out, [&] {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      writePoses(out, odometry_.poses());
+      writePoses(out, map_to_odom_);
+    }
+    if (then) then();
+  });
 }
 
 void MapReanchoring::restore(std::istream& in) {

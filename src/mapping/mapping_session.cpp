@@ -118,6 +118,7 @@ MappingSession::MappingSession(const MappingSessionConfig& config, VoxelMap* vox
     if (config_.reanchoring.enabled()) {
       own_reanchoring_ = std::make_unique<MapReanchoring>(voxels_, layer_, config_.reanchoring);
       reanchoring_ = own_reanchoring_.get();
+      resumeSubmaps();
     }
   }
   for (const LaserSourceConfig& laser_source : config_.laser_sources) {
@@ -206,6 +207,23 @@ FrameOutcome MappingSession::integrate(const LaserScanFrame& frame) {
                                                laser_source - &config_.laser_sources[0])];
   integrator.integrateIntoLayer(placed.scan, placed.sensor, layer_);
   return integrated(frame.header, frame.scan.ranges.size(), start);
+}
+
+void MappingSession::resumeSubmaps() {
+  try {
+    resumeCheckpointedSubmaps(*checkpoints_, reanchoring_);
+  } catch (const std::runtime_error& error) {
+    if (warnings_ != nullptr) {
+      *warnings_ << "warning: " << error.what() << "; the resumed map stays where it is\n";
+    }
+  }
+}
+
+CheckpointResult MappingSession::checkpoint(const std::string& stamp) {
+  if (!checkpoints_) return CheckpointResult();
+  if (reanchoring_ != nullptr)
+    return checkpointWithSubmaps(checkpoints_.get(), reanchoring_, stamp);
+  return checkpoints_->checkpoint(stamp);
 }
 
 ResumedMap MappingSession::resumeFrom(const std::string& path) {

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace occupancy_fusion {
@@ -39,6 +40,30 @@ bool readSubmapFile(MapReanchoring* reanchoring, const std::string& path) {
     reanchoring->restore(in);
   } catch (const std::runtime_error& error) {
     throw std::runtime_error(path + ": " + error.what());
+  }
+  return true;
+}
+
+CheckpointResult checkpointWithSubmaps(MapCheckpoints* checkpoints, MapReanchoring* reanchoring,
+                                       const std::string& stamp) {
+  std::ostringstream bytes;
+  CheckpointResult result;
+  reanchoring->saveThen(bytes, [&] {
+    const std::string text = bytes.str();
+    const std::vector<unsigned char> companion(text.begin(), text.end());
+    result = checkpoints->checkpoint(stamp, &companion);
+  });
+  return result;
+}
+
+bool resumeCheckpointedSubmaps(const MapCheckpoints& checkpoints, MapReanchoring* reanchoring) {
+  const std::vector<unsigned char>& bytes = checkpoints.resumedCompanion();
+  if (bytes.empty()) return false;
+  std::istringstream in(std::string(bytes.begin(), bytes.end()));
+  try {
+    reanchoring->restore(in);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(std::string("the checkpoint's submaps: ") + error.what());
   }
   return true;
 }

@@ -274,7 +274,9 @@ Eigen::Isometry3d readPose(std::istream& in) {
 
 }  // namespace
 
-void SubmapFusion::save(std::ostream& out) {
+void SubmapFusion::save(std::ostream& out) { saveThen(out, {}); }
+
+void SubmapFusion::saveThen(std::ostream& out, const std::function<void()>& then) {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   if (activeBlocks() > 0) closeActiveLocked(active_.written);
@@ -291,6 +293,7 @@ void SubmapFusion::save(std::ostream& out) {
   }
   writePose(out, active_.written);
   stores_->forEach([&](const auto& store) { store.writeRecords(out); });
+  if (then) then();
 }
 
 void SubmapFusion::restore(std::istream& in) {

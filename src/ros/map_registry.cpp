@@ -4,6 +4,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <ros/console.h>
+
+#include "occupancy_fusion/mapping/submap_files.h"
 #include "occupancy_fusion/params/config_readers.h"
 
 namespace occupancy_fusion {
@@ -34,7 +37,22 @@ SharedMap::SharedMap(const SharedMapConfig& config)
       checkpoints_(&voxels_, &layer_),
       reanchoring_(config.reanchoring.enabled()
                        ? std::make_unique<MapReanchoring>(&voxels_, &layer_, config.reanchoring)
-                       : nullptr) {}
+                       : nullptr) {
+  if (!reanchoring_) return;
+  try {
+    if (resumeCheckpointedSubmaps(checkpoints_, reanchoring_.get())) {
+      ROS_INFO("map '%s': %zu submaps resumed with the checkpoint", config_.name.c_str(),
+               reanchoring_->fusion().submaps().size() - 1);
+    }
+  } catch (const std::runtime_error& error) {
+    ROS_WARN("map '%s': %s; the resumed map stays where it is", config_.name.c_str(), error.what());
+  }
+}
+
+CheckpointResult SharedMap::checkpoint(const std::string& stamp) {
+  if (reanchoring_) return checkpointWithSubmaps(&checkpoints_, reanchoring_.get(), stamp);
+  return checkpoints_.checkpoint(stamp);
+}
 
 void SharedMap::reset() {
   {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "occupancy_fusion/map/grid_layer_2d.h"
 #include "occupancy_fusion/map/voxel_map.h"
@@ -31,9 +32,15 @@ class MapCheckpoints {
   MapCheckpoints(VoxelMap* voxels, GridLayer2D* layer);
 
   // VoxelMap::checkpoint with the layer's tiles changed since the previous one (all of them at
-  // the first, or when the layer's change log no longer reaches back).
-  CheckpointResult checkpoint(const std::string& stamp);
+  // the first, or when the layer's change log no longer reaches back), and `companion` when
+  // given: the bytes of what goes with the map (its submaps), in the same transaction.
+  CheckpointResult checkpoint(const std::string& stamp,
+                              const std::vector<unsigned char>* companion = nullptr);
   std::size_t resumedTiles() const { return resumed_tiles_; }
+  // The companion bytes of the checkpoint resumed (empty: none).
+  const std::vector<unsigned char>& resumedCompanion() const { return resumed_companion_; }
+  // The store's key for them: a layer record no tile can have (tiles' x stays within +-2^25).
+  static const std::uint64_t kCompanionKey;
 
  private:
   std::runtime_error damagedTile(std::uint64_t key, std::size_t size) const;
@@ -42,6 +49,7 @@ class MapCheckpoints {
   GridLayer2D* layer_;
   std::uint64_t layer_version_ = 0;  // the layer's version the last checkpoint holds
   std::size_t resumed_tiles_ = 0;
+  std::vector<unsigned char> resumed_companion_;
 };
 
 }  // namespace occupancy_fusion

@@ -18,6 +18,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <functional>
 #include <istream>
 #include <mutex>
 #include <optional>
@@ -97,8 +98,11 @@ class MapReanchoring {
   // The submaps, the odometry and the corrections heard, as bytes (submap_files.h), and back once
   // the map holds what was saved with them. restore throws std::runtime_error for bytes that are
   // not such a save (the map's contents then stay where they are, as one fixed submap).
-  void save(std::ostream& out);
+  void save(std::ostream& out) { saveThen(out, {}); }
   void restore(std::istream& in);
+  // save, then `then` before any frame is written into the next submap: a checkpoint of the map
+  // that holds what the bytes add up to.
+  void saveThen(std::ostream& out, const std::function<void()>& then);
 
   // Forgets the submaps, the odometry and empties the map (the map server's reset).
   void reset();

@@ -179,9 +179,8 @@ class MappingSession : public FrameConsumer {
   // A checkpoint of the map and its laser layer to the map's store
   // (VoxelMapConfig::checkpoint_period), stamped `stamp`; a session given its map and layer
   // leaves checkpoints to their owner (written: false).
-  CheckpointResult checkpoint(const std::string& stamp) {
-    return checkpoints_ ? checkpoints_->checkpoint(stamp) : CheckpointResult();
-  }
+  // With reanchoring the submaps go into the same checkpoint (submap_files.h).
+  CheckpointResult checkpoint(const std::string& stamp);
   // Laser layer tiles resumed from the store's checkpoint with the map.
   std::size_t resumedLayerTiles() const { return checkpoints_ ? checkpoints_->resumedTiles() : 0; }
   // The 2D layer laser scans write (empty until a recording has scans); part of the fused view.
@@ -209,6 +208,7 @@ class MappingSession : public FrameConsumer {
                      std::optional<MapReanchoring::PlacedFrame>* lease);
   FrameOutcome drop(const FrameHeader& header, const char* why, const std::string& reason,
                     const std::string& detail);
+  void resumeSubmaps();  // those of the checkpoint the owned map resumed
   // Counts an integrated frame of `kind` that started at `start` and remembers its stamp.
   FrameOutcome integrated(const FrameHeader& header, std::size_t measurements,
                           std::chrono::steady_clock::time_point start);

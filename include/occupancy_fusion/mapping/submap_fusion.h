@@ -21,6 +21,7 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <istream>
 #include <memory>
 #include <mutex>
@@ -128,6 +129,9 @@ class SubmapFusion {
   // the map's contents as one fixed submap.
   void save(std::ostream& out);
   void restore(std::istream& in);
+  // save, then `then` before any frame is written into the next submap (a checkpoint of the map
+  // in the same state as the bytes).
+  void saveThen(std::ostream& out, const std::function<void()>& then);
 
   // Empties the map and layer and forgets every submap (the map server's reset).
   void reset();

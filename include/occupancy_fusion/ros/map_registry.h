@@ -56,8 +56,9 @@ class SharedMap {
   const MapReanchoring* reanchoring() const { return reanchoring_.get(); }
 
   void reset();  // forgets everything: all voxels and cells unknown again, and the submaps
-  // A checkpoint of the voxels and the laser layer to the map's store (checkpoint_period).
-  CheckpointResult checkpoint(const std::string& stamp) { return checkpoints_.checkpoint(stamp); }
+  // A checkpoint of the voxels and the laser layer to the map's store (checkpoint_period), with
+  // the submaps when the map follows its localisation.
+  CheckpointResult checkpoint(const std::string& stamp);
   std::size_t resumedLayerTiles() const { return checkpoints_.resumedTiles(); }
 
   // A frame of `source` (its input topic) stamped `stamp` is in the map: called by a mapper after

@@ -276,6 +276,37 @@ TEST_F(MapReanchoringDrive, ASavedAndResumedMapFollowsTheNextCorrection) {
   EXPECT_EQ(fixed.onPath(path, drive().stamp(kFrames / 2)).moved, 0u);
 }
 
+// The same through the map's checkpoints: a process killed after a checkpoint and started on the
+// same store resumes the map with its submaps.
+TEST_F(MapReanchoringDrive, ACheckpointedMapResumesItsSubmaps) {
+  const TemporaryFolder folder("reanchoring_checkpoint");
+  MappingSessionConfig config = sessionConfig(ReanchoringConfig::Source::kPath);
+  config.map.spill_folder = folder.path("store");
+  config.map.checkpoint_period = 1.0;  // called by hand here
+  MappingSession continuous(sessionConfig(ReanchoringConfig::Source::kPath), &poses(), nullptr);
+  std::vector<StampedPose> path;
+  std::size_t submaps = 0;
+  {
+    MappingSession killed(config, &poses(), nullptr);
+    for (int k = 0; k < kFrames / 2; ++k) {
+      feed(drive(), k, false, &killed);
+      feed(drive(), k, false, &continuous);
+      if (k % 4 == 0) path.push_back({drive().stamp(k), drive().truth[k]});
+    }
+    ASSERT_TRUE(killed.checkpoint("before the kill").written);
+    submaps = killed.reanchoring()->fusion().submaps().size();
+  }
+  MappingSession resumed(config, &poses(), nullptr);
+  EXPECT_GT(resumed.map().knownVoxelCount(), 0u);
+  ASSERT_EQ(resumed.reanchoring()->fusion().submaps().size(), submaps);
+  EXPECT_FALSE(resumed.reanchoring()->fusion().submaps()[0].fixed);
+  EXPECT_GE(continuous.onPath(path, drive().stamp(kFrames / 2)).moved, 1u);
+  EXPECT_GE(resumed.onPath(path, drive().stamp(kFrames / 2)).moved, 1u);
+  EXPECT_GT(matchedVoxels(resumed.map(), continuous.map()), 0.99);
+  EXPECT_GT(matchedVoxels(continuous.map(), resumed.map()), 0.99);
+  EXPECT_GT(matchedCells(resumed.laserLayer(), continuous.laserLayer()), 0.99);
+}
+
 TEST_F(MapReanchoringDrive, WithoutCorrectionsTheMapIsTodaysVoxelForVoxel) {
   // map -> odom the identity throughout: reanchoring by tf gives today's map exactly.
   struct Unlocalised : PoseSource {
