@@ -363,7 +363,7 @@ LoopClosureRun mapOnce(const sim::Scene& scene, const LoopClosureCase& setup, co
   run.stereo_ms = ms("disparity");
   run.map_bytes = session.map().memoryBytes() + session.laserLayer().memoryBytes();
   if (const MapReanchoring* reanchoring = session.reanchoring()) {
-    run.submap_bytes = reanchoring->fusion().memoryBytes();
+    run.submap_bytes = reanchoring->fusion().memoryBytes() + reanchoring->keptScanBytes();
     run.submaps = reanchoring->fusion().submaps().size();
     const ReanchoringStatistics statistics = reanchoring->statistics();
     run.corrections = statistics.corrections;

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <stdexcept>
 
+#include "occupancy_fusion/mapping/mapping_session.h"  // placeScan
+
 namespace occupancy_fusion {
 namespace {
 
@@ -65,6 +67,61 @@ ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
 MapReanchoring::MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config)
     : config_(config), fusion_(map, layer, config.fusion) {
   config_.validate();
+  if (layer != nullptr) fusion_.setLayerDrawer(this);
+}
+
+MapReanchoring::~MapReanchoring() { fusion_.setLayerDrawer(nullptr); }
+
+void MapReanchoring::keepScan(int submap, const PolarLaserIntegrator& integrator, double stamp,
+                              const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan,
+                              double max_tilt) {
+  std::lock_guard<std::mutex> lock(scans_mutex_);
+  std::size_t index = 0;
+  while (index < integrators_.size() && integrators_[index].first != &integrator) ++index;
+  if (index == integrators_.size()) {
+    integrators_.emplace_back(&integrator,
+                              std::make_unique<PolarLaserIntegrator>(integrator.config()));
+    last_kept_.emplace_back(-INFINITY, Eigen::Isometry3d::Identity());
+  } else {
+    // Where the last one was: the scan adds nothing a redraw needs.
+    const auto& [last_stamp, last_pose] = last_kept_[index];
+    const Eigen::Isometry3d step = last_pose.inverse() * T_odom_sensor;
+    if (std::abs(stamp - last_stamp) < 1.0 && step.translation().norm() < 0.05 &&
+        Eigen::AngleAxisd(step.linear()).angle() < 0.05) {
+      return;
+    }
+  }
+  last_kept_[index] = {stamp, T_odom_sensor};
+  kept_scans_[submap].push_back({index, stamp, T_odom_sensor, scan, max_tilt});
+  kept_scan_bytes_ += sizeof(KeptScan) + scan.ranges.size() * sizeof(float);
+}
+
+std::size_t MapReanchoring::keptScanBytes() const {
+  std::lock_guard<std::mutex> lock(scans_mutex_);
+  return kept_scan_bytes_;
+}
+
+bool MapReanchoring::draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) {
+  std::vector<StampedPose> corrections;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    corrections = corrections_;
+  }
+  std::lock_guard<std::mutex> lock(scans_mutex_);
+  const auto kept = kept_scans_.find(id);
+  if (kept == kept_scans_.end() || kept->second.empty()) return false;
+  for (const KeptScan& scan : kept->second) {
+    // Each scan at the correction of its own time, the submap's placement without one.
+    const Eigen::Isometry3d T_map_sensor =
+        correctionAt(corrections, scan.stamp).value_or(T_map_odom) * scan.T_odom_sensor;
+    try {
+      const PlacedScan placed = placeScan(scan.scan, T_map_sensor, scan.max_tilt);
+      integrators_[scan.integrator].second->integrateIntoLayer(placed.scan, placed.sensor, layer);
+    } catch (const std::invalid_argument&) {
+      // Tilted beyond max_tilt at the corrected pose: left out, as a frame would be.
+    }
+  }
+  return true;
 }
 
 std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
@@ -87,7 +144,7 @@ std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
     if (!T_map_odom) return std::nullopt;
     applyMapToOdom(*T_map_odom, stamp);
   }
-  PlacedFrame placed{fusion_.beginFrame(stamp), Eigen::Isometry3d::Identity()};
+  PlacedFrame placed{fusion_.beginFrame(stamp), Eigen::Isometry3d::Identity(), *T_odom_sensor};
   placed.T_map_sensor = placed.lease.T_map_odom() * *T_odom_sensor;
   return placed;
 }
@@ -118,6 +175,7 @@ SubmapMoveResult MapReanchoring::applyPath(const std::vector<StampedPose>& path,
   {
     std::lock_guard<std::mutex> lock(mutex_);
     corrections = correctionsAlongPath(path, odometry_, config_.trajectory);
+    if (!corrections.empty()) corrections_ = corrections;
     statistics_.path_keyframes = path.size();
     statistics_.path_corrections = corrections.size();
   }
@@ -148,6 +206,7 @@ SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_o
     std::stable_sort(map_to_odom_.begin(), map_to_odom_.end(),
                      [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
     corrections = map_to_odom_;
+    corrections_ = corrections;
   }
   const SubmapMoveResult result =
       fusion_.place(placementsFromCorrections(corrections, submaps), T_map_odom);
@@ -230,7 +289,12 @@ void MapReanchoring::reset() {
   std::lock_guard<std::mutex> lock(mutex_);
   odometry_.clear();
   map_to_odom_.clear();
+  corrections_.clear();
   started_ = false;
+  std::lock_guard<std::mutex> scans(scans_mutex_);
+  kept_scans_.clear();
+  kept_scan_bytes_ = 0;
+  for (auto& last : last_kept_) last.first = -INFINITY;
   statistics_ = ReanchoringStatistics();
 }
 

@@ -15,6 +15,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <ostream>
 #include <utility>
 #include <vector>
@@ -195,6 +196,32 @@ class StoreSubmaps {
   }
   void cover(int id, const SubmapPlacement& placement) { addCoverage(id, placement); }
 
+  // Submap `id` re-placed with its changes drawn anew at placement.placed (its measurements
+  // integrated there from unknown: no re-sampling), replacing those it had; `touched` as move().
+  void redraw(int id, const std::vector<std::pair<Index, Cells>>& drawn,
+              const SubmapPlacement& placement, SpatialKeySet* touched) {
+    touched->insert(records_[id].footprint.begin(), records_[id].footprint.end());
+    removeCoverage(id);
+    Record record;
+    for (const auto& [index, cells] : drawn) {
+      if (cells.known_count > 0) record.add(index, Traits::store(cells), cellSide());
+    }
+    // The bounds stay those of where the submap was written, as for the other records.
+    Eigen::AlignedBox3d written;
+    if (!record.bounds.isEmpty()) {
+      const Eigen::Isometry3d back = placement.written * placement.placed.inverse();
+      for (int i = 0; i < 8; ++i) {
+        written.extend(back *
+                       record.bounds.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i)));
+      }
+    }
+    record.bounds = written;
+    record.drawn_at = placement.placed;
+    records_[id] = std::move(record);
+    addCoverage(id, placement);
+    touched->insert(records_[id].footprint.begin(), records_[id].footprint.end());
+  }
+
   // The blocks rebuilt from the closed submaps at their placements (by id), with the active
   // submap's writes so far on top.
   void rebuild(const SpatialKeySet& touched, const std::vector<SubmapPlacement>& placements) {
@@ -237,6 +264,11 @@ class StoreSubmaps {
   void writeRecords(std::ostream& out) const {
     writeValue(out, static_cast<std::uint64_t>(records_.size()));
     for (const Record& record : records_) {
+      writeValue(out, static_cast<std::uint8_t>(record.drawn_at ? 1 : 0));
+      if (record.drawn_at) {
+        out.write(reinterpret_cast<const char*>(record.drawn_at->matrix().data()),
+                  16 * sizeof(double));
+      }
       writeValue(out, static_cast<std::uint64_t>(record.changes.size()));
       for (const auto& entry : record.changes) {
         writeValue(out, entry.first);
@@ -249,6 +281,14 @@ class StoreSubmaps {
     if (!readValue(in, &count) || count != expected) return false;
     std::deque<Record> records(count);
     for (Record& record : records) {
+      std::uint8_t drawn = 0;
+      if (!readValue(in, &drawn)) return false;
+      if (drawn != 0) {
+        Eigen::Isometry3d at = Eigen::Isometry3d::Identity();
+        in.read(reinterpret_cast<char*>(at.matrix().data()), 16 * sizeof(double));
+        if (!in || !at.matrix().allFinite()) return false;
+        record.drawn_at = at;
+      }
       std::uint64_t blocks = 0;
       if (!readValue(in, &blocks)) return false;
       for (std::uint64_t i = 0; i < blocks; ++i) {
@@ -309,6 +349,9 @@ class StoreSubmaps {
     std::size_t bytes = 0;
     Eigen::AlignedBox3d bounds;            // of its blocks, where written
     std::vector<std::uint64_t> footprint;  // the store's blocks its placed changes reach
+    // Set when the changes were drawn anew from the submap's measurements at this placement
+    // (redraw) instead of being those it wrote: they are in the map's grid there.
+    std::optional<Eigen::Isometry3d> drawn_at;
 
     void add(const Index& index, typename Traits::Stored stored, double cell_side) {
       bytes += Traits::bytes(stored);
@@ -345,8 +388,14 @@ class StoreSubmaps {
     return Eigen::AlignedBox3d(Traits::point(lo), Traits::point(hi));
   }
 
+  // Where a record's changes were taken: where written, or where they were drawn anew.
+  static SubmapPlacement effective(const Record& record, const SubmapPlacement& placement) {
+    return record.drawn_at ? SubmapPlacement{*record.drawn_at, placement.placed} : placement;
+  }
+
   std::vector<std::uint64_t> footprint(const Record& record,
-                                       const SubmapPlacement& placement) const {
+                                       const SubmapPlacement& submap_placement) const {
+    const SubmapPlacement placement = effective(record, submap_placement);
     std::vector<std::uint64_t> keys;
     if (placement.atWrittenPlace()) {
       for (const auto& entry : record.changes) keys.push_back(entry.first);
@@ -443,8 +492,10 @@ class StoreSubmaps {
   // submap's grid no longer lines up with the map's: each cell takes the change of the written
   // cell under its centre (nearest cell; interpolating between cells, measured, placed thin walls
   // no better and cost four to eight reads a cell: docs/loop_closures.md).
-  void foldInto(int id, const SubmapPlacement& placement, const Index& index, Cells* cells) const {
+  void foldInto(int id, const SubmapPlacement& submap_placement, const Index& index,
+                Cells* cells) const {
     const Record& record = records_[id];
+    const SubmapPlacement placement = effective(record, submap_placement);
     const float min = store_->minLogOdds(), max = store_->maxLogOdds();
     if (placement.atWrittenPlace()) {
       Cells scratch;

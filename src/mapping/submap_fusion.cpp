@@ -180,9 +180,7 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
     }
     submap.placed = placement.second;
     stores_->voxels.move(submap.id, {submap.written, submap.placed}, &touched_blocks);
-    if (stores_->tiles) {
-      stores_->tiles->move(submap.id, {submap.written, submap.placed}, &touched_tiles);
-    }
+    if (stores_->tiles) moveTiles(submap, &touched_tiles);
     ++result.moved;
   }
   std::vector<SubmapPlacement> placed;
@@ -192,6 +190,28 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
   result.blocks_rewritten = touched_blocks.size() + touched_tiles.size();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+void SubmapFusion::setLayerDrawer(LayerDrawer* drawer) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  drawer_ = drawer;
+}
+
+void SubmapFusion::moveTiles(const Meta& submap, SpatialKeySet* touched) {
+  const SubmapPlacement placement{submap.written, submap.placed};
+  if (drawer_ != nullptr) {
+    GridLayer2DConfig config = layer_->config();
+    config.max_memory_bytes = 0;
+    GridLayer2D drawn(config);
+    if (drawer_->draw(submap.id, submap.placed, &drawn)) {
+      std::vector<std::pair<TileIndex, GridTile>> tiles;
+      drawn.forEachTile(
+          [&](const TileIndex& index, const GridTile& tile) { tiles.emplace_back(index, tile); });
+      stores_->tiles->redraw(submap.id, tiles, placement, touched);
+      return;
+    }
+  }
+  stores_->tiles->move(submap.id, placement, touched);
 }
 
 std::vector<SubmapInfo> SubmapFusion::submaps() const {

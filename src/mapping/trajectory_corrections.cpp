@@ -86,6 +86,14 @@ std::vector<StampedPose> correctionsAlongPath(const std::vector<StampedPose>& pa
   return corrections;
 }
 
+std::optional<Eigen::Isometry3d> correctionAt(const std::vector<StampedPose>& corrections,
+                                              double stamp) {
+  if (corrections.empty()) return std::nullopt;
+  const double clamped =
+      std::min(std::max(stamp, corrections.front().stamp), corrections.back().stamp);
+  return interpolateAt(corrections, clamped, INFINITY);
+}
+
 std::vector<std::pair<int, Eigen::Isometry3d>> placementsFromCorrections(
     const std::vector<StampedPose>& corrections, const std::vector<SubmapInfo>& submaps) {
   std::vector<std::pair<int, Eigen::Isometry3d>> placements;

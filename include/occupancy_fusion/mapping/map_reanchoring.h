@@ -20,12 +20,15 @@
 #include <cstddef>
 #include <functional>
 #include <istream>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
+#include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
 #include "occupancy_fusion/mapping/frames.h"
 #include "occupancy_fusion/mapping/submap_fusion.h"
 #include "occupancy_fusion/mapping/trajectory_corrections.h"
@@ -68,15 +71,19 @@ struct ReanchoringStatistics {
   std::size_t map_to_odom_jumps = 0;  // tf's map -> odom changes beyond min_shift
 };
 
-class MapReanchoring {
+class MapReanchoring : private LayerDrawer {
  public:
   // Watches `map` and `layer` (layer may be null; both must outlive this).
   MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config);
+  ~MapReanchoring() override;
+  MapReanchoring(const MapReanchoring&) = delete;
+  MapReanchoring& operator=(const MapReanchoring&) = delete;
 
   // A frame placed in the map: hold `lease` until its write is done.
   struct PlacedFrame {
     SubmapFusion::FrameLease lease;
     Eigen::Isometry3d T_map_sensor;
+    Eigen::Isometry3d T_odom_sensor;
   };
   // Places a frame of `sensor_frame` at `stamp` by the odometry (odom -> sensor_frame) and the
   // active submap's placement; starts a new submap when the robot went far enough; with `tf`
@@ -85,6 +92,15 @@ class MapReanchoring {
   std::optional<PlacedFrame> placeFrame(const PoseSource& poses, const std::string& map_frame,
                                         const std::string& sensor_frame, double stamp,
                                         std::string* why);
+  // A laser scan integrated into submap `submap`'s part of the layer, kept so that the submap's
+  // cells can be drawn anew, each scan at its own correction, when the submap moves (instead of
+  // re-sampled: thin walls then land where a map made with the corrected poses has them).
+  // `integrator`: the session's, whose settings a copy of its own uses. A scan taken where the
+  // last kept one of its integrator was (within 5 cm and 3 deg, 1 s) is not kept again.
+  void keepScan(int submap, const PolarLaserIntegrator& integrator, double stamp,
+                const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan, double max_tilt);
+  std::size_t keptScanBytes() const;
+
   // The SLAM system's keyframes (T_map_base of base_frame), the whole optimised path.
   SubmapMoveResult applyPath(const std::vector<StampedPose>& path, double stamp = 0.0);
   // map -> odom at `stamp` (what placeFrame does with tf's; for callers that have it otherwise).
@@ -111,8 +127,29 @@ class MapReanchoring {
   void countCorrection(const SubmapMoveResult& result, double stamp);
   void startSubmapIfDue(const Eigen::Vector3d& position, double stamp);
 
+  bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) override;
+
+  struct KeptScan {
+    std::size_t integrator = 0;  // in integrators_
+    double stamp = 0.0;
+    Eigen::Isometry3d T_odom_sensor;
+    LaserScan scan;
+    double max_tilt = 0.0;
+  };
+
   ReanchoringConfig config_;
   SubmapFusion fusion_;
+  // Guards the kept scans and their integrators (draw runs on the correcting thread).
+  mutable std::mutex scans_mutex_;
+  std::map<int, std::vector<KeptScan>> kept_scans_;  // by submap
+  std::size_t kept_scan_bytes_ = 0;
+  // Copies of the sessions' integrators, by the session's one they copy.
+  std::vector<std::pair<const PolarLaserIntegrator*, std::unique_ptr<PolarLaserIntegrator>>>
+      integrators_;
+  // Per integrator, the stamp and pose of the last scan kept.
+  std::vector<std::pair<double, Eigen::Isometry3d>> last_kept_;
+  // The corrections of the last path or tf's jumps: where each kept scan is drawn.
+  std::vector<StampedPose> corrections_;
   mutable std::mutex mutex_;  // the odometry, the submap's start and the statistics
   OdometryTrack odometry_;
   std::vector<StampedPose> map_to_odom_;  // tf's map -> odom: the first, then at each jump

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "occupancy_fusion/map/grid_layer_2d.h"
+#include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/voxel_map.h"
 
 namespace occupancy_fusion {
@@ -71,6 +72,17 @@ struct SubmapMoveResult {
   std::size_t moved = 0;             // submaps re-placed
   std::size_t blocks_rewritten = 0;  // blocks of the fused map rebuilt
   double seconds = 0.0;              // wall time, rebuild included
+};
+
+// What draws a submap's part of the laser layer anew at another placement, from what its scans
+// measured (MapReanchoring keeps them): a moved submap's thin walls then land where a map made
+// at that placement has them, instead of being re-sampled from a grid that moved.
+class LayerDrawer {
+ public:
+  virtual ~LayerDrawer() = default;
+  // Integrates submap `id`'s scans into `layer` (empty) with the submap placed at T_map_odom.
+  // false: nothing kept for it (its cells are re-sampled instead).
+  virtual bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) = 0;
 };
 
 class SubmapFusion {
@@ -118,6 +130,10 @@ class SubmapFusion {
 
   std::vector<SubmapInfo> submaps() const;
   int activeSubmap() const;
+  // The laser layer's moved submaps are drawn by `drawer` from now on (nullptr: re-sampled); it
+  // must outlive the fusion or be unset. Called from place(), not under the map's locks.
+  void setLayerDrawer(LayerDrawer* drawer);
+
   const SubmapFusionConfig& config() const { return config_; }
   double minShift() const { return min_shift_; }  // m, config().min_shift or one voxel
   std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
@@ -150,6 +166,8 @@ class SubmapFusion {
   // By value: callers pass the active submap's own placement, which closing it replaces.
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
   void restoreLocked(std::istream& in);
+  // A moved submap's laser tiles: drawn anew by drawer_ when it can, else re-sampled.
+  void moveTiles(const Meta& submap, SpatialKeySet* touched);
   void fixContentsLocked();  // the map's contents become one fixed submap, nothing else
   // The active submap shown at `placed`; frames from now on written at `next`.
   void placeActiveLocked(const Eigen::Isometry3d& placed, const Eigen::Isometry3d& next);
@@ -165,6 +183,7 @@ class SubmapFusion {
   std::shared_mutex frames_mutex_;  // shared: frames in flight; unique: a submap closes
   mutable std::mutex mutex_;        // the submaps
   std::unique_ptr<Stores> stores_;
+  LayerDrawer* drawer_ = nullptr;
   std::vector<Meta> closed_;  // by id
   Meta active_;               // id closed_.size(); its stamps also change under stamp_mutex_
   mutable std::mutex stamp_mutex_;

@@ -60,6 +60,11 @@ std::vector<StampedPose> correctionsAlongPath(const std::vector<StampedPose>& pa
                                               const OdometryTrack& odometry,
                                               const TrajectoryCorrectionConfig& config);
 
+// The correction at `stamp`: interpolated between those around it, the nearest beyond their ends;
+// nullopt without any.
+std::optional<Eigen::Isometry3d> correctionAt(const std::vector<StampedPose>& corrections,
+                                              double stamp);
+
 // Each submap's placement (T_map_odom) by the corrections: the mean of those within its stamps,
 // else the one interpolated at its middle. Submaps without stamps (fixed, or nothing written yet)
 // and every submap when there is no correction are left out.
