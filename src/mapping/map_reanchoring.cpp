@@ -275,6 +275,12 @@ void MapReanchoring::saveThen(std::ostream& out, const std::function<void()>& th
 }
 
 void MapReanchoring::restore(std::istream& in) {
+  {
+    // Kept scans belong to the submaps before: the restored ones are re-sampled when they move.
+    std::lock_guard<std::mutex> scans(scans_mutex_);
+    kept_scans_.clear();
+    kept_scan_bytes_ = 0;
+  }
   fusion_.restore(in);
   std::vector<StampedPose> odometry = readPoses(in), map_to_odom = readPoses(in);
   std::lock_guard<std::mutex> lock(mutex_);
