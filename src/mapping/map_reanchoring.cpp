@@ -1,14 +1,23 @@
 #include "occupancy_fusion/mapping/map_reanchoring.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <stdexcept>
+#include <utility>
 
 #include "occupancy_fusion/mapping/mapping_session.h"  // placeScan
 
 namespace occupancy_fusion {
 namespace {
+
+// Tells reanchorings apart for the drawing threads' integrators (an address may be reused).
+std::uint64_t nextSerial() {
+  static std::atomic<std::uint64_t> serial{0};
+  return ++serial;
+}
 
 void requirePositive(double value, const char* name, bool zero_allowed) {
   if (std::isfinite(value) && (value > 0.0 || (zero_allowed && value == 0.0))) return;
@@ -65,7 +74,7 @@ ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
 }
 
 MapReanchoring::MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config)
-    : config_(config), fusion_(map, layer, config.fusion) {
+    : config_(config), fusion_(map, layer, config.fusion), serial_(nextSerial()) {
   config_.validate();
   if (layer != nullptr) fusion_.setLayerDrawer(this);
 }
@@ -107,16 +116,29 @@ bool MapReanchoring::draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer
     std::lock_guard<std::mutex> lock(mutex_);
     corrections = corrections_;
   }
-  std::lock_guard<std::mutex> lock(scans_mutex_);
-  const auto kept = kept_scans_.find(id);
-  if (kept == kept_scans_.end() || kept->second.empty()) return false;
-  for (const KeptScan& scan : kept->second) {
+  std::vector<KeptScan> scans;
+  std::vector<PolarLaserIntegratorConfig> configs;
+  {
+    std::lock_guard<std::mutex> lock(scans_mutex_);
+    const auto kept = kept_scans_.find(id);
+    if (kept == kept_scans_.end() || kept->second.empty()) return false;
+    scans = kept->second;
+    for (const auto& integrator : integrators_) configs.push_back(integrator.second->config());
+  }
+  // Several submaps are drawn at once, each thread with integrators of its own (an integrator
+  // keeps caches of its sensors' geometry), made once per thread and reanchoring.
+  thread_local std::map<std::pair<std::uint64_t, std::size_t>,
+                        std::unique_ptr<PolarLaserIntegrator>>
+      integrators;
+  for (const KeptScan& scan : scans) {
+    std::unique_ptr<PolarLaserIntegrator>& integrator = integrators[{serial_, scan.integrator}];
+    if (!integrator) integrator = std::make_unique<PolarLaserIntegrator>(configs[scan.integrator]);
     // Each scan at the correction of its own time, the submap's placement without one.
     const Eigen::Isometry3d T_map_sensor =
         correctionAt(corrections, scan.stamp).value_or(T_map_odom) * scan.T_odom_sensor;
     try {
       const PlacedScan placed = placeScan(scan.scan, T_map_sensor, scan.max_tilt);
-      integrators_[scan.integrator].second->integrateIntoLayer(placed.scan, placed.sensor, layer);
+      integrator->integrateIntoLayer(placed.scan, placed.sensor, layer);
     } catch (const std::invalid_argument&) {
       // Tilted beyond max_tilt at the corrected pose: left out, as a frame would be.
     }

@@ -171,6 +171,7 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
   }
   frames.unlock();  // frames go on into the new active submap while the map is rebuilt
   SpatialKeySet touched_blocks, touched_tiles;
+  std::vector<int> moved;
   for (const auto& placement : placements) {
     if (placement.first < 0 || placement.first >= static_cast<int>(closed_.size())) continue;
     Meta& submap = closed_[static_cast<std::size_t>(placement.first)];
@@ -180,9 +181,10 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
     }
     submap.placed = placement.second;
     stores_->voxels.move(submap.id, {submap.written, submap.placed}, &touched_blocks);
-    if (stores_->tiles) moveTiles(submap, &touched_tiles);
+    moved.push_back(submap.id);
     ++result.moved;
   }
+  if (stores_->tiles) moveTiles(moved, &touched_tiles);
   std::vector<SubmapPlacement> placed;
   for (const Meta& submap : closed_) placed.push_back({submap.written, submap.placed});
   stores_->voxels.rebuild(touched_blocks, placed);
@@ -197,21 +199,34 @@ void SubmapFusion::setLayerDrawer(LayerDrawer* drawer) {
   drawer_ = drawer;
 }
 
-void SubmapFusion::moveTiles(const Meta& submap, SpatialKeySet* touched) {
-  const SubmapPlacement placement{submap.written, submap.placed};
+void SubmapFusion::moveTiles(const std::vector<int>& moved, SpatialKeySet* touched) {
+  // Drawn anew where the drawer can, each submap on its own thread; re-sampled where it cannot.
+  std::vector<std::vector<std::pair<TileIndex, GridTile>>> drawn(moved.size());
+  std::vector<char> was_drawn(moved.size(), 0);
   if (drawer_ != nullptr) {
     GridLayer2DConfig config = layer_->config();
     config.max_memory_bytes = 0;
-    GridLayer2D drawn(config);
-    if (drawer_->draw(submap.id, submap.placed, &drawn)) {
-      std::vector<std::pair<TileIndex, GridTile>> tiles;
-      drawn.forEachTile(
-          [&](const TileIndex& index, const GridTile& tile) { tiles.emplace_back(index, tile); });
-      stores_->tiles->redraw(submap.id, tiles, placement, touched);
-      return;
+    const long count = static_cast<long>(moved.size());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long i = 0; i < count; ++i) {
+      const Meta& submap = closed_[static_cast<std::size_t>(moved[i])];
+      GridLayer2D layer(config);
+      if (!drawer_->draw(submap.id, submap.placed, &layer)) continue;
+      layer.forEachTile([&](const TileIndex& index, const GridTile& tile) {
+        drawn[i].emplace_back(index, tile);
+      });
+      was_drawn[i] = 1;
     }
   }
-  stores_->tiles->move(submap.id, placement, touched);
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    const Meta& submap = closed_[static_cast<std::size_t>(moved[i])];
+    const SubmapPlacement placement{submap.written, submap.placed};
+    if (was_drawn[i]) {
+      stores_->tiles->redraw(submap.id, drawn[i], placement, touched);
+    } else {
+      stores_->tiles->move(submap.id, placement, touched);
+    }
+  }
 }
 
 std::vector<SubmapInfo> SubmapFusion::submaps() const {

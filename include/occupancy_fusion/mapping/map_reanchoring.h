@@ -18,6 +18,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <istream>
 #include <map>
@@ -139,6 +140,7 @@ class MapReanchoring : private LayerDrawer {
 
   ReanchoringConfig config_;
   SubmapFusion fusion_;
+  std::uint64_t serial_;  // this reanchoring among all made in the process
   // Guards the kept scans and their integrators (draw runs on the correcting thread).
   mutable std::mutex scans_mutex_;
   std::map<int, std::vector<KeptScan>> kept_scans_;  // by submap

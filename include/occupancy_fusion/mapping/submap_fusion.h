@@ -81,7 +81,8 @@ class LayerDrawer {
  public:
   virtual ~LayerDrawer() = default;
   // Integrates submap `id`'s scans into `layer` (empty) with the submap placed at T_map_odom.
-  // false: nothing kept for it (its cells are re-sampled instead).
+  // false: nothing kept for it (its cells are re-sampled instead). Called for several submaps at
+  // once, on several threads.
   virtual bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) = 0;
 };
 
@@ -166,8 +167,8 @@ class SubmapFusion {
   // By value: callers pass the active submap's own placement, which closing it replaces.
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
   void restoreLocked(std::istream& in);
-  // A moved submap's laser tiles: drawn anew by drawer_ when it can, else re-sampled.
-  void moveTiles(const Meta& submap, SpatialKeySet* touched);
+  // The moved submaps' laser tiles: drawn anew by drawer_ when it can, else re-sampled.
+  void moveTiles(const std::vector<int>& moved, SpatialKeySet* touched);
   void fixContentsLocked();  // the map's contents become one fixed submap, nothing else
   // The active submap shown at `placed`; frames from now on written at `next`.
   void placeActiveLocked(const Eigen::Isometry3d& placed, const Eigen::Isometry3d& next);
