@@ -6,7 +6,8 @@
 //  2. The simulator pauses; once the mappers are idle and two more checkpoints went by, the map
 //     is saved (what the store's last checkpoint holds), and `manager` is killed with SIGKILL.
 //  3. A MapServer on the same store in `manager_b` resumes it: its saved .ot, .bt and laser layer
-//     are the bytes saved before the kill.
+//     are the bytes saved before the kill, and its submaps (the map follows map -> odom) are those
+//     saved before it.
 #include <signal.h>
 #include <sys/types.h>
 
@@ -42,6 +43,8 @@ void setMapParameters(const std::string& name, const std::string& store) {
   ros::param::set(name + "/checkpoint_period", 0.5);
   ros::param::set(name + "/max_memory_mb", 0.5);         // ~250 dense blocks
   ros::param::set(name + "/layer_max_memory_mb", 0.05);  // ~12 tiles
+  // Following map -> odom: the submaps go into the checkpoints and come back with them.
+  ros::param::set(name + "/reanchoring/source", std::string("tf"));
 }
 
 // The process id of a node, from its own XML-RPC server (what `rosnode info` asks).
@@ -127,6 +130,11 @@ TEST(MapCheckpointResume, ManagerKilledWithSigkillResumesItsLastCheckpoint) {
     EXPECT_GT(expected.size(), 1000u) << extension;
     EXPECT_TRUE(readBytes(resumed + extension) == expected) << extension << " differs";
   }
+  // The submaps came back with the checkpoint: the same submaps, changes and odometry (their
+  // blocks in another order), not the resumed map as one fixed submap.
+  const std::string submaps = readBytes(saved + ".submaps");
+  EXPECT_GT(submaps.size(), 1000u);
+  EXPECT_EQ(readBytes(resumed + ".submaps").size(), submaps.size());
   const DiagnosticValues values =
       observer.diagnosticsAfter("map_server_b: map publishing", ros::WallTime::now(), 5.0);
   EXPECT_GT(countIn(values, "blocks resumed from the store"), 0u);
