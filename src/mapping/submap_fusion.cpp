@@ -53,15 +53,7 @@ SubmapFusion::SubmapFusion(VoxelMap* map, GridLayer2D* layer, const SubmapFusion
   config_.validate();
   min_shift_ = config_.min_shift > 0.0 ? config_.min_shift : map_->resolution();
   stores_ = std::make_unique<Stores>(map_, layer_);
-  bool held = stores_->voxels.holdsContents();
-  if (stores_->tiles) held = held || stores_->tiles->holdsContents();
-  if (held) {
-    stores_->forEach([](auto& store) { store.adoptExistingContents(); });
-    Meta fixed;
-    fixed.fixed = true;
-    closed_.push_back(fixed);
-    stores_->forEach([](auto& store) { store.cover(0, SubmapPlacement()); });
-  }
+  adoptContentsLocked();
   active_.id = static_cast<int>(closed_.size());
   active_.written = active_.placed = T_map_odom;
   stores_->forEach([](auto& store) { store.startWatching(); });
@@ -380,20 +372,23 @@ void SubmapFusion::restoreLocked(std::istream& in) {
   active_.written = active_.placed = next;
 }
 
+void SubmapFusion::adoptContentsLocked() {
+  bool held = stores_->voxels.holdsContents();
+  if (stores_->tiles) held = held || stores_->tiles->holdsContents();
+  if (!held) return;
+  stores_->forEach([](auto& store) { store.adoptExistingContents(); });
+  Meta fixed;
+  fixed.fixed = true;
+  closed_.push_back(fixed);
+  stores_->forEach([](auto& store) { store.cover(0, SubmapPlacement()); });
+}
+
 void SubmapFusion::fixContentsLocked() {
   const Eigen::Isometry3d written = active_.written;
   stores_->forEach([](auto& store) { store.reset(); });
   std::lock_guard<std::mutex> stamps(stamp_mutex_);
   closed_.clear();
-  bool held = stores_->voxels.holdsContents();
-  if (stores_->tiles) held = held || stores_->tiles->holdsContents();
-  if (held) {
-    stores_->forEach([](auto& store) { store.adoptExistingContents(); });
-    Meta fixed;
-    fixed.fixed = true;
-    closed_.push_back(fixed);
-    stores_->forEach([](auto& store) { store.cover(0, SubmapPlacement()); });
-  }
+  adoptContentsLocked();
   active_ = Meta();
   active_.id = static_cast<int>(closed_.size());
   active_.written = active_.placed = written;

@@ -169,7 +169,8 @@ class SubmapFusion {
   void restoreLocked(std::istream& in);
   // The moved submaps' laser tiles: drawn anew by drawer_ when it can, else re-sampled.
   void moveTiles(const std::vector<int>& moved, SpatialKeySet* touched);
-  void fixContentsLocked();  // the map's contents become one fixed submap, nothing else
+  void fixContentsLocked();    // the map's contents become one fixed submap, nothing else
+  void adoptContentsLocked();  // what the map holds, if anything, as fixed submap 0
   // The active submap shown at `placed`; frames from now on written at `next`.
   void placeActiveLocked(const Eigen::Isometry3d& placed, const Eigen::Isometry3d& next);
   Eigen::AlignedBox3d boundsOf(int id) const;
