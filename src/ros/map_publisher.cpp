@@ -390,6 +390,23 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
                      "the laser layer's spill store failed (tiles kept in memory or unreadable)");
     }
   }
+  if (const MapReanchoring* reanchoring = map_->reanchoring()) {
+    const ReanchoringStatistics corrections = reanchoring->statistics();
+    status.add("reanchoring", sourceName(reanchoring->config().source));
+    status.add("submaps", reanchoring->fusion().submaps().size());
+    status.add("submaps memory bytes",
+               reanchoring->fusion().memoryBytes() + reanchoring->keptScanBytes());
+    status.add("corrections applied", corrections.corrections);
+    status.add("submaps moved", corrections.submaps_moved);
+    status.add("slowest correction (ms)", 1e3 * corrections.slowest_correction_seconds);
+    status.add("last path keyframes", corrections.path_keyframes);
+    status.add("last path keyframes matched with the odometry", corrections.path_corrections);
+    if (corrections.path_keyframes > 0 && corrections.path_corrections == 0) {
+      status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                     "no keyframe of the SLAM path matches the odometry heard "
+                     "(reanchoring/base_frame, reanchoring/odom_frame?)");
+    }
+  }
   status.add("longest lock hold (ms)", lock_statistics_.longestHoldMs());
   status.add("longest lock hold (call)", lock_statistics_.longestHoldCall());
   status.add("longest wait for a read (ms)", lock_statistics_.longestReadWaitMs());

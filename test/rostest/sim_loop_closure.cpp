@@ -159,6 +159,12 @@ TEST(SimLoopClosure, TheMapFollowsTheCorrection) {
   EXPECT_LT(voxels_genuine_before, 0.9);
   EXPECT_GE(voxels_genuine_after, 0.97);
   EXPECT_GE(occupied_after, 2000u);
+  // The MapServer's diagnostics tell what happened.
+  const DiagnosticValues diagnostics = g_observer->diagnostics("map_server: map publishing");
+  EXPECT_EQ(diagnostics.count("reanchoring") ? diagnostics.at("reanchoring") : "", "path");
+  EXPECT_GE(countIn(diagnostics, "corrections applied"), 1u);
+  EXPECT_GE(countIn(diagnostics, "submaps moved"), 3u);
+  EXPECT_GE(countIn(diagnostics, "last path keyframes matched with the odometry"), 10u);
 }
 
 }  // namespace
