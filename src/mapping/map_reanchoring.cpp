@@ -209,15 +209,11 @@ SubmapMoveResult MapReanchoring::applyPath(const std::vector<StampedPose>& path,
 }
 
 SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
-  std::vector<SubmapInfo> submaps = fusion_.submaps();
+  // Every frame asks: measured over the newest blocks only, the submaps listed only on a jump.
+  const Eigen::AlignedBox3d reach = fusion_.newestBounds();
   std::vector<StampedPose> corrections;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    // A change is measured over the newest blocks: those of the active submap, or the last one's.
-    Eigen::AlignedBox3d reach;
-    for (auto it = submaps.rbegin(); reach.isEmpty() && it != submaps.rend(); ++it) {
-      reach = it->bounds;
-    }
     const bool jump = map_to_odom_.empty() ||
                       largestShift(reach, Eigen::Isometry3d::Identity(), map_to_odom_.back().pose,
                                    T_map_odom) > fusion_.minShift() ||
@@ -231,7 +227,7 @@ SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_o
     corrections_ = corrections;
   }
   const SubmapMoveResult result =
-      fusion_.place(placementsFromCorrections(corrections, submaps), T_map_odom);
+      fusion_.place(placementsFromCorrections(corrections, fusion_.submaps()), T_map_odom);
   countCorrection(result, stamp);
   return result;
 }

@@ -261,6 +261,15 @@ std::vector<SubmapInfo> SubmapFusion::submaps() const {
   return result;
 }
 
+Eigen::AlignedBox3d SubmapFusion::newestBounds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Eigen::AlignedBox3d box = activeBounds();
+  for (int id = static_cast<int>(closed_.size()) - 1; box.isEmpty() && id >= 0; --id) {
+    box = boundsOf(id);
+  }
+  return box;
+}
+
 int SubmapFusion::activeSubmap() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return active_.id;

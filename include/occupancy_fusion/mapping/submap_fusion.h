@@ -130,6 +130,9 @@ class SubmapFusion {
                          const std::optional<Eigen::Isometry3d>& next = std::nullopt);
 
   std::vector<SubmapInfo> submaps() const;
+  // The map-frame box (where written) of the newest blocks: the active submap's, else those of
+  // the last submap that has any; empty when there are none.
+  Eigen::AlignedBox3d newestBounds() const;
   int activeSubmap() const;
   // The laser layer's moved submaps are drawn by `drawer` from now on (nullptr: re-sampled); it
   // must outlive the fusion or be unset. Called from place(), not under the map's locks.
