@@ -74,7 +74,12 @@ ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
 }
 
 MapReanchoring::MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config)
-    : config_(config), fusion_(map, layer, config.fusion), serial_(nextSerial()) {
+    : config_(config),
+      fusion_(map, layer, config.fusion),
+      // tf's map -> odom wanders by millimetres with every localisation update (AMCL): a jump is
+      // a voxel unless set, so that those are not each taken as a correction.
+      jump_shift_(config.fusion.min_shift > 0.0 ? config.fusion.min_shift : map->resolution()),
+      serial_(nextSerial()) {
   config_.validate();
   if (layer != nullptr) fusion_.setLayerDrawer(this);
 }
@@ -216,7 +221,7 @@ SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_o
     std::lock_guard<std::mutex> lock(mutex_);
     const bool jump = map_to_odom_.empty() ||
                       largestShift(reach, Eigen::Isometry3d::Identity(), map_to_odom_.back().pose,
-                                   T_map_odom) > fusion_.minShift() ||
+                                   T_map_odom) > jump_shift_ ||
                       (reach.isEmpty() && !T_map_odom.isApprox(map_to_odom_.back().pose));
     if (!jump) return {};
     if (!map_to_odom_.empty()) ++statistics_.map_to_odom_jumps;

@@ -50,7 +50,9 @@ struct VoxelStoreTraits {
   }
   static int side() { return VoxelBlock::kSide; }
 
-  static Stored store(const Cells& changes) { return Stored(changes); }
+  static Stored store(const Store& store, const Cells& before, const Cells& after) {
+    return Stored(before, after, store.thresholdLogOdds());
+  }
   static const Cells& view(const Stored& stored, Cells* scratch) {
     stored.expandInto(scratch);
     return *scratch;
@@ -92,7 +94,9 @@ struct TileStoreTraits {
   }
   static int side() { return GridTile::kSide; }
 
-  static Stored store(const Cells& changes) { return Stored(changes); }
+  static Stored store(const Store& store, const Cells& before, const Cells& after) {
+    return Stored(before, after, store.thresholdLogOdds());
+  }
   static const Cells& view(const Stored& stored, Cells* scratch) {
     stored.expandInto(scratch);
     return *scratch;
@@ -141,8 +145,7 @@ class StoreSubmaps {
   void adoptExistingContents() {
     Record record;
     for (const auto& entry : Traits::copyAll(*store_)) {
-      // From unknown, a cell's change is its value.
-      record.add(entry.first, Traits::store(entry.second), cellSide());
+      record.add(entry.first, Traits::store(*store_, Cells(), entry.second), cellSide());
     }
     records_.push_back(std::move(record));
   }
@@ -154,11 +157,12 @@ class StoreSubmaps {
     Record record;
     auto next = std::make_unique<ActiveWrites>(cellSide());
     Traits::setWriteWatcher(store_, next.get(), [&](const auto& read) {
-      Cells after, changes;
+      Cells after;
       for (const auto& entry : active_->before) {
         if (!read(Traits::unkey(entry.first), &after)) after = Cells();
-        if (logOddsChanges(before(entry.second), after, &changes) == 0) continue;
-        record.add(Traits::unkey(entry.first), Traits::store(changes), cellSide());
+        typename Traits::Stored stored = Traits::store(*store_, before(entry.second), after);
+        if (stored.changed() == 0) continue;
+        record.add(Traits::unkey(entry.first), std::move(stored), cellSide());
       }
     });
     active_ = std::move(next);
@@ -197,14 +201,17 @@ class StoreSubmaps {
   void cover(int id, const SubmapPlacement& placement) { addCoverage(id, placement); }
 
   // Submap `id` re-placed with its changes drawn anew at placement.placed (its measurements
-  // integrated there from unknown: no re-sampling), replacing those it had; `touched` as move().
-  void redraw(int id, const std::vector<std::pair<Index, Cells>>& drawn,
-              const SubmapPlacement& placement, SpatialKeySet* touched) {
+  // integrated there: no re-sampling), each block from before[i] to after[i], replacing those it
+  // had; `touched` as move().
+  void redraw(int id, const std::vector<Index>& indices, const std::vector<Cells>& before,
+              const std::vector<Cells>& after, const SubmapPlacement& placement,
+              SpatialKeySet* touched) {
     touched->insert(records_[id].footprint.begin(), records_[id].footprint.end());
     removeCoverage(id);
     Record record;
-    for (const auto& [index, cells] : drawn) {
-      if (cells.known_count > 0) record.add(index, Traits::store(cells), cellSide());
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+      typename Traits::Stored stored = Traits::store(*store_, before[i], after[i]);
+      if (stored.changed() > 0) record.add(indices[i], std::move(stored), cellSide());
     }
     // The bounds stay those of where the submap was written, as for the other records.
     Eigen::AlignedBox3d written;
@@ -220,6 +227,39 @@ class StoreSubmaps {
     records_[id] = std::move(record);
     addCoverage(id, placement);
     touched->insert(records_[id].footprint.begin(), records_[id].footprint.end());
+  }
+
+  // Where submap `id`'s measurements land when drawn at `placement`: its placed footprint grown
+  // by one block each way (a scan drawn at its own correction may reach a block further).
+  std::vector<Index> reach(int id, const SubmapPlacement& placement) const {
+    SpatialKeySet reached;
+    const Index one = Index::Ones();
+    for (std::uint64_t key : footprint(records_[id], placement)) {
+      const Index index = Traits::unkey(key);
+      forEachIndexIn(Index(index - one), Index(index + one),
+                     [&](const Index& near) { reached.insert(Traits::key(near)); });
+    }
+    std::vector<Index> indices;
+    for (std::uint64_t key : reached) indices.push_back(Traits::unkey(key));
+    return indices;
+  }
+
+  // The closed submaps written before `id` added up over `indices` at their placements: what the
+  // store held there, as those submaps are placed now, when submap `id` began.
+  std::vector<Cells> foldBefore(int id, const std::vector<Index>& indices,
+                                const std::vector<SubmapPlacement>& placements) const {
+    std::vector<Cells> sums(indices.size());
+    const long count = static_cast<long>(indices.size());
+#pragma omp parallel for schedule(dynamic, 8)
+    for (long i = 0; i < count; ++i) {
+      auto it = coverage_.find(Traits::key(indices[i]));
+      if (it == coverage_.end()) continue;
+      for (int earlier : it->second) {
+        if (earlier >= id) break;  // in the order written
+        foldInto(earlier, placements[earlier], indices[i], &sums[i]);
+      }
+    }
+    return sums;
   }
 
   // The blocks rebuilt from the closed submaps at their placements (by id), with the active

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <stdexcept>
 #include <string>
 
@@ -42,7 +43,7 @@ double largestShift(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& wri
 
 void SubmapFusionConfig::validate() const {
   if (!(min_shift >= 0.0) || !std::isfinite(min_shift)) {
-    throw std::invalid_argument("submaps/min_shift must be >= 0 m (0: one voxel), got " +
+    throw std::invalid_argument("submaps/min_shift must be >= 0 m (0: a quarter voxel), got " +
                                 std::to_string(min_shift));
   }
 }
@@ -51,7 +52,7 @@ SubmapFusion::SubmapFusion(VoxelMap* map, GridLayer2D* layer, const SubmapFusion
                            const Eigen::Isometry3d& T_map_odom)
     : map_(map), layer_(layer), config_(config) {
   config_.validate();
-  min_shift_ = config_.min_shift > 0.0 ? config_.min_shift : map_->resolution();
+  min_shift_ = config_.min_shift > 0.0 ? config_.min_shift : 0.25 * map_->resolution();
   stores_ = std::make_unique<Stores>(map_, layer_);
   adoptContentsLocked();
   active_.id = static_cast<int>(closed_.size());
@@ -176,11 +177,16 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
     moved.push_back(submap.id);
     ++result.moved;
   }
-  if (stores_->tiles) moveTiles(moved, &touched_tiles);
   std::vector<SubmapPlacement> placed;
   for (const Meta& submap : closed_) placed.push_back({submap.written, submap.placed});
-  stores_->voxels.rebuild(touched_blocks, placed);
-  if (stores_->tiles) stores_->tiles->rebuild(touched_tiles, placed);
+  // The voxels and the laser layer are rebuilt side by side: they share nothing.
+  auto voxels =
+      std::async(std::launch::async, [&] { stores_->voxels.rebuild(touched_blocks, placed); });
+  if (stores_->tiles) {
+    moveTiles(moved, placed, &touched_tiles);
+    stores_->tiles->rebuild(touched_tiles, placed);
+  }
+  voxels.get();
   result.blocks_rewritten = touched_blocks.size() + touched_tiles.size();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -191,33 +197,40 @@ void SubmapFusion::setLayerDrawer(LayerDrawer* drawer) {
   drawer_ = drawer;
 }
 
-void SubmapFusion::moveTiles(const std::vector<int>& moved, SpatialKeySet* touched) {
-  // Drawn anew where the drawer can, each submap on its own thread; re-sampled where it cannot.
-  std::vector<std::vector<std::pair<TileIndex, GridTile>>> drawn(moved.size());
-  std::vector<char> was_drawn(moved.size(), 0);
-  if (drawer_ != nullptr) {
-    GridLayer2DConfig config = layer_->config();
-    config.max_memory_bytes = 0;
-    const long count = static_cast<long>(moved.size());
-#pragma omp parallel for schedule(dynamic, 1)
-    for (long i = 0; i < count; ++i) {
-      const Meta& submap = closed_[static_cast<std::size_t>(moved[i])];
+void SubmapFusion::moveTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
+                             SpatialKeySet* touched) {
+  // Drawn anew where the drawer can, re-sampled where it cannot. In the order written, each on
+  // what the submaps before it hold there now: a cell's updates are then clamped in the order a
+  // single pass over the scans clamps them (drawn from unknown and added, a wall that a later
+  // submap's scans cleared stays occupied, measured: docs/loop_closures.md).
+  std::sort(moved.begin(), moved.end());
+  GridLayer2DConfig config = layer_->config();
+  config.max_memory_bytes = 0;
+  for (int id : moved) {
+    const SubmapPlacement& placement = placed[static_cast<std::size_t>(id)];
+    if (drawer_ != nullptr) {
+      const std::vector<TileIndex> reach = stores_->tiles->reach(id, placement);
+      const std::vector<GridTile> before = stores_->tiles->foldBefore(id, reach, placed);
       GridLayer2D layer(config);
-      if (!drawer_->draw(submap.id, submap.placed, &layer)) continue;
-      layer.forEachTile([&](const TileIndex& index, const GridTile& tile) {
-        drawn[i].emplace_back(index, tile);
-      });
-      was_drawn[i] = 1;
+      SpatialKeyMap<std::size_t> position;
+      for (std::size_t i = 0; i < reach.size(); ++i) {
+        position.emplace(packKey(reach[i]), i);
+        if (before[i].known_count > 0) layer.restoreTile(reach[i], before[i]);
+      }
+      if (drawer_->draw(id, placement.placed, &layer)) {
+        std::vector<TileIndex> indices;
+        std::vector<GridTile> from, to;
+        layer.forEachTile([&](const TileIndex& index, const GridTile& after) {
+          const auto found = position.find(packKey(index));
+          indices.push_back(index);
+          from.push_back(found == position.end() ? GridTile() : before[found->second]);
+          to.push_back(after);
+        });
+        stores_->tiles->redraw(id, indices, from, to, placement, touched);
+        continue;
+      }
     }
-  }
-  for (std::size_t i = 0; i < moved.size(); ++i) {
-    const Meta& submap = closed_[static_cast<std::size_t>(moved[i])];
-    const SubmapPlacement placement{submap.written, submap.placed};
-    if (was_drawn[i]) {
-      stores_->tiles->redraw(submap.id, drawn[i], placement, touched);
-    } else {
-      stores_->tiles->move(submap.id, placement, touched);
-    }
+    stores_->tiles->move(id, placement, touched);
   }
 }
 

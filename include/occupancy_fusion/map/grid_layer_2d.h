@@ -121,6 +121,7 @@ class GridLayer2D {
   const OccupancyModel& model() const { return config_.model; }
   float minLogOdds() const { return min_log_odds_; }
   float maxLogOdds() const { return max_log_odds_; }
+  float thresholdLogOdds() const { return threshold_log_odds_; }
   Occupancy classify(float log_odds) const {
     return log_odds > threshold_log_odds_ ? Occupancy::kOccupied : Occupancy::kFree;
   }

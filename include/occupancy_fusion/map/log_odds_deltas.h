@@ -60,26 +60,31 @@ void addLogOddsChanges(const LogOddsCells<kCount>& changes, float min_log_odds, 
 // A block's (tile's) changes as the submaps keep them: a bit per cell that changed and, for those
 // only, the change in steps of kStep log-odds (16 bits; |change| stays below the clamping range,
 // far inside the +-32 they hold). A block seen for the first time takes about half a dense
-// block's memory, a block seen again only its changed cells. Rounding moves a change by at most
-// kStep / 2.
+// block's memory, a block seen again only its changed cells. Each change is rounded to a step
+// away from the occupancy threshold on the side where the cell ended: added to the same `before`
+// again it gives a cell classified as `after` was, also where `after` lies within a step of the
+// threshold (a laser cell whose evidence cancels out to +1e-5 stays occupied, as in the map the
+// sensors wrote). Rounding moves a change by less than kStep.
 template <int kCount>
 class PackedLogOddsChanges {
  public:
   static constexpr float kStep = 1.0f / 1024.0f;
 
   PackedLogOddsChanges() = default;
-  explicit PackedLogOddsChanges(const LogOddsCells<kCount>& changes) {
-    values_.reserve(static_cast<std::size_t>(changes.known_count));
+  PackedLogOddsChanges(const LogOddsCells<kCount>& before, const LogOddsCells<kCount>& after,
+                       float threshold) {
     for (int i = 0; i < kCount; ++i) {
-      const float change = changes.log_odds[i];
+      const float change = logOddsChange(before.log_odds[i], after.log_odds[i]);
       if (std::isnan(change)) continue;
       mask_[i / 64] |= std::uint64_t{1} << (i % 64);
-      const float steps = std::round(change / kStep);
+      const float steps =
+          after.log_odds[i] > threshold ? std::ceil(change / kStep) : std::floor(change / kStep);
       const float limit = std::numeric_limits<std::int16_t>::max();
       values_.push_back(static_cast<std::int16_t>(steps < -limit  ? -limit
                                                   : steps > limit ? limit
                                                                   : steps));
     }
+    values_.shrink_to_fit();
   }
 
   // The changes, NaN where there is none.

@@ -2,10 +2,10 @@
 // are placed by odometry into submaps (submap_fusion.h), and the submaps are placed in the map by
 // the corrections, from one of
 //  - `tf`: map -> odom as tf gives it at each frame's stamp. A localisation publishes the
-//    correction that is right now; when it jumps (by more than min_shift), the jump is taken as
-//    right at its stamp, and the odometry's drift as grown evenly since the previous jump: each
-//    submap of that stretch is placed by the correction interpolated at its time (the same rule
-//    as a path of two keyframes, trajectory_corrections.h), older submaps stay. What AMCL,
+//    correction that is right now; when it jumps (by more than min_shift, else a voxel), it is
+//    taken as right at its stamp, and the odometry's drift as grown evenly since the previous jump:
+//    each submap of that stretch is placed by the correction interpolated at its time (the same
+//    rule as a path of two keyframes, trajectory_corrections.h), older submaps stay. What AMCL,
 //    slam_toolbox and cartographer publish.
 //  - `path`: the SLAM system's optimised keyframes, T_map_base at their stamps (a nav_msgs/Path
 //    republished whenever the graph changes: LIO-SAM's mapping/path, RTAB-Map's mapPath), given
@@ -69,7 +69,7 @@ struct ReanchoringStatistics {
   double last_correction_stamp = 0.0;  // s, the frame or path that brought it
   std::size_t path_keyframes = 0;      // of the last path, and those matched with the odometry
   std::size_t path_corrections = 0;
-  std::size_t map_to_odom_jumps = 0;  // tf's map -> odom changes beyond min_shift
+  std::size_t map_to_odom_jumps = 0;  // tf's map -> odom changes beyond min_shift (a voxel)
 };
 
 class MapReanchoring : private LayerDrawer {
@@ -140,6 +140,7 @@ class MapReanchoring : private LayerDrawer {
 
   ReanchoringConfig config_;
   SubmapFusion fusion_;
+  double jump_shift_;     // m: a change of tf's map -> odom that counts as a jump
   std::uint64_t serial_;  // this reanchoring among all made in the process
   // Guards the kept scans and their integrators (draw runs on the correcting thread).
   mutable std::mutex scans_mutex_;

@@ -39,11 +39,15 @@ namespace occupancy_fusion {
 
 struct SubmapFusionConfig {
   // m. A new placement that moves no corner of a submap's blocks by more than this leaves the
-  // submap where it is (SLAM's small adjustments of old keyframes cost nothing). 0: one voxel.
+  // submap where it is (SLAM's small adjustments of old keyframes cost nothing). 0: a quarter
+  // voxel (a laser wall drawn a third of a cell off already lands in other cells: measured on the
+  // CARMEN logs, docs/loop_closures.md).
   double min_shift = 0.0;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
+
+struct SubmapPlacement;  // where a submap was written and is shown (store_submaps.h)
 
 // One submap as diagnostics and the trajectory corrections see it.
 struct SubmapInfo {
@@ -139,7 +143,7 @@ class SubmapFusion {
   void setLayerDrawer(LayerDrawer* drawer);
 
   const SubmapFusionConfig& config() const { return config_; }
-  double minShift() const { return min_shift_; }  // m, config().min_shift or one voxel
+  double minShift() const { return min_shift_; }  // m, config().min_shift or a quarter voxel
   std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
 
   // The submaps as bytes, to be saved beside the map (submap_files.h): the active submap is closed
@@ -171,7 +175,9 @@ class SubmapFusion {
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
   void restoreLocked(std::istream& in);
   // The moved submaps' laser tiles: drawn anew by drawer_ when it can, else re-sampled.
-  void moveTiles(const std::vector<int>& moved, SpatialKeySet* touched);
+  // `placed`: every closed submap's placement, by id.
+  void moveTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
+                 SpatialKeySet* touched);
   void fixContentsLocked();    // the map's contents become one fixed submap, nothing else
   void adoptContentsLocked();  // what the map holds, if anything, as fixed submap 0
   // The active submap shown at `placed`; frames from now on written at `next`.
@@ -183,7 +189,7 @@ class SubmapFusion {
   VoxelMap* map_;
   GridLayer2D* layer_;
   SubmapFusionConfig config_;
-  double min_shift_;  // m, config_'s or one voxel
+  double min_shift_;  // m, config_'s or a quarter voxel
 
   std::shared_mutex frames_mutex_;  // shared: frames in flight; unique: a submap closes
   mutable std::mutex mutex_;        // the submaps

@@ -259,6 +259,31 @@ TEST_F(MapReanchoringDrive, APathOfTrueKeyframesGivesTheTrueMap) {
   EXPECT_GE(session.reanchoring()->statistics().corrections, 3u);
 }
 
+// Every frame's true pose in the path, given once after the drive: each moved submap's scans are
+// drawn again at their true poses, in the order written and on what the submaps before hold, so
+// the laser layer is the true-pose layer's, each cell's updates clamped in the same order (up to
+// the 1/1024 steps the submaps keep changes in, rounded away from the threshold: rounded to the
+// nearest step, the wall cells whose evidence cancels to +1e-4 come back at 0, free: IoU 0.85).
+TEST_F(MapReanchoringDrive, APathOfEveryTruePoseDrawsTheTrueLaserLayer) {
+  MappingSessionConfig config = sessionConfig(ReanchoringConfig::Source::kPath);
+  config.reanchoring.fusion.min_shift = 1e-4;  // every submap moves
+  MappingSession session(config, &poses(), nullptr);
+  std::vector<StampedPose> path;
+  for (int k = 0; k < kFrames; ++k) {
+    feed(drive(), k, false, &session);
+    path.push_back({drive().stamp(k), drive().truth[k]});
+  }
+  session.onPath(path, drive().stamp(kFrames - 1));
+  EXPECT_GT(layerIoU(session.laserLayer(), truth_->laserLayer()), 0.995);
+  std::size_t cells = 0, close = 0;
+  truth_->laserLayer().forEachKnownCell([&](const CellIndex& index, float value) {
+    ++cells;
+    const std::optional<float> drawn = session.laserLayer().logOdds(index);
+    close += drawn && std::abs(*drawn - value) < 0.02f ? 1 : 0;
+  });
+  EXPECT_GT(static_cast<double>(close) / static_cast<double>(cells), 0.995);
+}
+
 // Mapped before a restart, saved with its submaps, resumed: the first correction after the
 // restart moves what was mapped before it, as it does in a session that never stopped.
 TEST_F(MapReanchoringDrive, ASavedAndResumedMapFollowsTheNextCorrection) {

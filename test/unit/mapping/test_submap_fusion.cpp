@@ -18,7 +18,7 @@ namespace {
 constexpr double kResolution = 0.1;
 // A submap keeps each change rounded to PackedLogOddsChanges' step: a rebuilt cell is within this
 // of the exact sum per submap that reaches it.
-constexpr float kRounding = PackedLogOddsChanges<VoxelBlock::kVolume>::kStep / 2;
+constexpr float kRounding = PackedLogOddsChanges<VoxelBlock::kVolume>::kStep;
 
 VoxelMapConfig mapConfig() {
   VoxelMapConfig config;
@@ -204,16 +204,16 @@ TEST(SubmapFusion, AMovedActiveSubmapIsClosedAndTheNextIsWrittenAtTheNewPlace) {
 
 TEST(SubmapFusion, MovesBelowTheThresholdLeaveTheMapAlone) {
   VoxelMap map(mapConfig());
-  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());  // one voxel
+  SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());  // a quarter voxel
   seeWall(2.0, Eigen::Vector3d(0, 0, 0.5), {}, &map);
   fusion.startSubmap(Eigen::Isometry3d::Identity());
   const Cells before = knownCells(map);
-  EXPECT_EQ(fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.04, 0.05, 0.0))}}).moved,
+  EXPECT_EQ(fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.01, 0.02, 0.0))}}).moved,
             0u);
   EXPECT_EQ(knownCells(map), before);
-  // A small turn that moves the far corner of the wall's blocks by more than a voxel counts.
+  // A small turn that moves the far corner of the wall's blocks by more than that counts.
   EXPECT_EQ(
-      fusion.place({{0, Eigen::Isometry3d(Eigen::AngleAxisd(0.06, Eigen::Vector3d::UnitZ()))}})
+      fusion.place({{0, Eigen::Isometry3d(Eigen::AngleAxisd(0.015, Eigen::Vector3d::UnitZ()))}})
           .moved,
       1u);
 }
@@ -322,6 +322,43 @@ TEST(SubmapFusion, TheLaserLayerMovesWithTheMapsPlanarPlacement) {
 
 // A map saved with its submaps and loaded elsewhere moves with a later correction as the original
 // does.
+// Measurements of one cell, kept per submap in odometry: submap 0 saw an object there (hits),
+// submap 1 saw through where it had been (misses). Drawn again at a new placement in the order
+// written, each on what the submaps before it hold, the cell ends as one pass over the
+// measurements ends it: free. Drawn from unknown and added up, submap 1's clearing is clamped at
+// the minimum first and the object stays (about 3.5 - 2 = 1.5, occupied).
+TEST(SubmapFusion, MovedSubmapsAreDrawnAgainInTheOrderWritten) {
+  struct CellDrawer : LayerDrawer {
+    std::map<int, std::vector<float>> updates;  // by submap, of the cell at (0.25, 0.25) in odom
+    bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) override {
+      const Eigen::Vector3d at = T_map_odom * Eigen::Vector3d(0.25, 0.25, 0.0);
+      for (float update : updates.at(id)) layer->updateCell(layer->indexOf(at.head<2>()), update);
+      return true;
+    }
+    void write(int id, GridLayer2D* layer) {
+      for (float update : updates.at(id)) layer->updateCell(layer->indexOf({0.25, 0.25}), update);
+    }
+  } drawer;
+  drawer.updates[0] = std::vector<float>(6, 0.85f);  // clamped at the maximum
+  drawer.updates[1] = std::vector<float>(10, -0.4f);
+  VoxelMap map(mapConfig());
+  GridLayer2D layer(layerConfig());
+  SubmapFusion fusion(&map, &layer, SubmapFusionConfig());
+  fusion.setLayerDrawer(&drawer);
+  drawer.write(0, &layer);
+  fusion.startSubmap();
+  drawer.write(1, &layer);
+  fusion.startSubmap();
+  const float cleared = layer.maxLogOdds() - 4.0f;
+  EXPECT_LT(cleared, 0.0f);
+  EXPECT_NEAR(*layer.logOdds(layer.indexOf({0.25, 0.25})), cleared, 1e-5f);
+  const Eigen::Isometry3d moved(Eigen::Translation3d(1.0, 0.0, 0.0));
+  EXPECT_EQ(fusion.place({{0, moved}, {1, moved}}).moved, 2u);
+  EXPECT_NEAR(*layer.logOdds(layer.indexOf({1.25, 0.25})), cleared, 2 * kRounding);
+  EXPECT_EQ(layer.occupancyAt({1.25, 0.25}), Occupancy::kFree);
+  EXPECT_FALSE(layer.logOdds(layer.indexOf({0.25, 0.25})));  // nothing left where it was
+}
+
 TEST(SubmapFusion, SavedSubmapsMoveTheLoadedMapAsTheyMovedTheOriginal) {
   VoxelMap original(mapConfig());
   GridLayer2D original_layer(layerConfig());
@@ -388,12 +425,15 @@ TEST(SubmapFusion, DamagedSubmapsLeaveTheLoadedMapInPlace) {
   EXPECT_FLOAT_EQ(*coarse.logOdds(VoxelIndex(1, 1, 1)), 1.0f);
 }
 
-TEST(PackedLogOddsChanges, KeepsWhichCellsChangedAndEachChangeToHalfAStep) {
-  VoxelBlock changes;
-  changes.set(0, 0.8473f);
-  changes.set(7, -5.4931f);  // the whole clamping range of the defaults
-  changes.set(511, 0.0f);    // a cell that became known at the prior
-  const PackedLogOddsChanges<VoxelBlock::kVolume> packed(changes);
+TEST(PackedLogOddsChanges, KeepsWhichCellsChangedAndEachChangeToAStep) {
+  VoxelBlock before, after;
+  after.set(0, 0.8473f);
+  before.set(7, 3.5f);
+  after.set(7, -1.9931f);  // the whole clamping range of the defaults
+  after.set(511, 0.0f);    // a cell that became known at the prior
+  before.set(300, 0.4f);
+  after.set(300, 0.4f);  // known, unchanged
+  const PackedLogOddsChanges<VoxelBlock::kVolume> packed(before, after, 0.0f);
   EXPECT_EQ(packed.changed(), 3u);
   EXPECT_LT(packed.bytes(), 200u);
   VoxelBlock out;
@@ -402,11 +442,37 @@ TEST(PackedLogOddsChanges, KeepsWhichCellsChangedAndEachChangeToHalfAStep) {
   EXPECT_NEAR(out.log_odds[0], 0.8473f, kRounding);
   EXPECT_NEAR(out.log_odds[7], -5.4931f, kRounding);
   EXPECT_EQ(out.log_odds[511], 0.0f);
-  for (int i : {1, 6, 8, 64, 510}) EXPECT_TRUE(std::isnan(out.log_odds[i])) << i;
+  for (int i : {1, 6, 8, 64, 300, 510}) EXPECT_TRUE(std::isnan(out.log_odds[i])) << i;
   // Every cell changed: about half a dense block.
   VoxelBlock all;
   for (int i = 0; i < VoxelBlock::kVolume; ++i) all.set(i, -0.4f);
-  EXPECT_LT(PackedLogOddsChanges<VoxelBlock::kVolume>(all).bytes(), sizeof(VoxelBlock) * 6 / 10);
+  EXPECT_LT(PackedLogOddsChanges<VoxelBlock::kVolume>(VoxelBlock(), all, 0.0f).bytes(),
+            sizeof(VoxelBlock) * 6 / 10);
+}
+
+// Evidence that cancels to within a step of the threshold: the change, added to the same cell,
+// leaves it on the side it ended on (rounded to the nearest step, 0.85 - 0.8499 and 0.85 - 0.8501
+// would both come back as 0, free).
+TEST(PackedLogOddsChanges, AddedAgainACellEndsOnTheSideOfTheThresholdItEndedOn) {
+  VoxelBlock before, after;
+  for (int i = 0; i < 200; ++i) {
+    before.set(i, 0.85f);
+    after.set(i, (i % 2 == 0 ? 1.0f : -1.0f) * 1e-5f * static_cast<float>(i + 1));
+  }
+  for (const float threshold : {0.0f, 0.3f}) {
+    for (int i = 200; i < 400; ++i) {
+      before.set(i, -0.7f);
+      after.set(i, threshold + (i % 2 == 0 ? 1.0f : -1.0f) * 1e-5f * static_cast<float>(i - 199));
+    }
+    const PackedLogOddsChanges<VoxelBlock::kVolume> packed(before, after, threshold);
+    VoxelBlock changes, again = before;
+    packed.expandInto(&changes);
+    addLogOddsChanges(changes, -2.0f, 3.5f, &again);
+    for (int i = (threshold == 0.0f ? 0 : 200); i < 400; ++i) {
+      EXPECT_EQ(again.log_odds[i] > threshold, after.log_odds[i] > threshold) << i;
+      EXPECT_NEAR(again.log_odds[i], after.log_odds[i], kRounding) << i;
+    }
+  }
 }
 
 TEST(SubmapFusion, RejectsANegativeThreshold) {
