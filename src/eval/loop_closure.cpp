@@ -348,6 +348,8 @@ LoopClosureRun mapOnce(const sim::Scene& scene, const LoopClosureCase& setup, co
       session.onPath(publishedPath(drive, k), drive.stamp(k));
     }
     if (!evaluatedAt(setup, k, count)) continue;
+    // tf's corrections move the map on a thread of their own: measured once they have.
+    if (MapReanchoring* reanchoring = session.reanchoring()) reanchoring->waitForCorrections();
     SpatialKeySet grid;
     run.curve.push_back(evaluator.measure(session, k, true_poses ? nullptr : true_grids, &grid));
     if (true_poses) (*true_grids)[k] = std::move(grid);

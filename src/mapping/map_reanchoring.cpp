@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <map>
 #include <stdexcept>
@@ -84,7 +85,10 @@ MapReanchoring::MapReanchoring(VoxelMap* map, GridLayer2D* layer, const Reanchor
   if (layer != nullptr) fusion_.setLayerDrawer(this);
 }
 
-MapReanchoring::~MapReanchoring() { fusion_.setLayerDrawer(nullptr); }
+MapReanchoring::~MapReanchoring() {
+  stopCorrecting();
+  fusion_.setLayerDrawer(nullptr);
+}
 
 void MapReanchoring::keepScan(int submap, const PolarLaserIntegrator& integrator, double stamp,
                               const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan,
@@ -169,7 +173,7 @@ std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
     const std::optional<Eigen::Isometry3d> T_map_odom =
         poses.lookup(map_frame, config_.odom_frame, stamp, why);
     if (!T_map_odom) return std::nullopt;
-    applyMapToOdom(*T_map_odom, stamp);
+    followMapToOdom(*T_map_odom, stamp);
   }
   PlacedFrame placed{fusion_.beginFrame(stamp), Eigen::Isometry3d::Identity(), *T_odom_sensor};
   placed.T_map_sensor = placed.lease.T_map_odom() * *T_odom_sensor;
@@ -177,7 +181,6 @@ std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
 }
 
 void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double stamp) {
-  bool due = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!started_) {
@@ -186,15 +189,17 @@ void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double st
       submap_start_stamp_ = stamp;
       return;
     }
-    due = (position - submap_start_position_).norm() > config_.submap_distance ||
-          (config_.submap_seconds > 0.0 && stamp - submap_start_stamp_ > config_.submap_seconds) ||
-          stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
-    if (due) {
-      submap_start_position_ = position;
-      submap_start_stamp_ = stamp;
-    }
+    const bool due =
+        (position - submap_start_position_).norm() > config_.submap_distance ||
+        (config_.submap_seconds > 0.0 && stamp - submap_start_stamp_ > config_.submap_seconds) ||
+        stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
+    if (!due) return;
   }
-  if (due) fusion_.startSubmap();
+  // While a correction rebuilds the map, the next frame tries again: this one is not held up.
+  if (!fusion_.tryStartSubmap(std::nullopt)) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  submap_start_position_ = position;
+  submap_start_stamp_ = stamp;
 }
 
 SubmapMoveResult MapReanchoring::applyPath(const std::vector<StampedPose>& path, double stamp) {
@@ -213,28 +218,81 @@ SubmapMoveResult MapReanchoring::applyPath(const std::vector<StampedPose>& path,
   return result;
 }
 
-SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
+std::optional<std::vector<StampedPose>> MapReanchoring::noteMapToOdom(
+    const Eigen::Isometry3d& T_map_odom, double stamp) {
   // Every frame asks: measured over the newest blocks only, the submaps listed only on a jump.
   const Eigen::AlignedBox3d reach = fusion_.newestBounds();
-  std::vector<StampedPose> corrections;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const bool jump = map_to_odom_.empty() ||
-                      largestShift(reach, Eigen::Isometry3d::Identity(), map_to_odom_.back().pose,
-                                   T_map_odom) > jump_shift_ ||
-                      (reach.isEmpty() && !T_map_odom.isApprox(map_to_odom_.back().pose));
-    if (!jump) return {};
-    if (!map_to_odom_.empty()) ++statistics_.map_to_odom_jumps;
-    map_to_odom_.push_back({stamp, T_map_odom});
-    std::stable_sort(map_to_odom_.begin(), map_to_odom_.end(),
-                     [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
-    corrections = map_to_odom_;
-    corrections_ = corrections;
-  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  const bool jump = map_to_odom_.empty() ||
+                    largestShift(reach, Eigen::Isometry3d::Identity(), map_to_odom_.back().pose,
+                                 T_map_odom) > jump_shift_ ||
+                    (reach.isEmpty() && !T_map_odom.isApprox(map_to_odom_.back().pose));
+  if (!jump) return std::nullopt;
+  if (!map_to_odom_.empty()) ++statistics_.map_to_odom_jumps;
+  map_to_odom_.push_back({stamp, T_map_odom});
+  std::stable_sort(map_to_odom_.begin(), map_to_odom_.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  corrections_ = map_to_odom_;
+  return map_to_odom_;
+}
+
+SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
+  const std::optional<std::vector<StampedPose>> corrections = noteMapToOdom(T_map_odom, stamp);
+  if (!corrections) return {};
   const SubmapMoveResult result =
-      fusion_.place(placementsFromCorrections(corrections, fusion_.submaps()), T_map_odom);
+      fusion_.place(placementsFromCorrections(*corrections, fusion_.submaps()), T_map_odom);
   countCorrection(result, stamp);
   return result;
+}
+
+void MapReanchoring::followMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
+  std::optional<std::vector<StampedPose>> corrections = noteMapToOdom(T_map_odom, stamp);
+  if (!corrections) return;
+  // The frames from now on go into a new submap at the new correction at once (or, while a
+  // correction rebuilds the map, once it is done: place()'s `next`); the submaps before are
+  // moved on the correcting thread, while this sensor's frames go on.
+  fusion_.tryStartSubmap(T_map_odom);
+  std::lock_guard<std::mutex> lock(worker_mutex_);
+  pending_ = PendingCorrection{std::move(*corrections), T_map_odom, stamp};
+  if (!worker_.joinable()) worker_ = std::thread([this] { correctInTurn(); });
+  worker_wake_.notify_all();
+}
+
+void MapReanchoring::correctInTurn() {
+  std::unique_lock<std::mutex> lock(worker_mutex_);
+  while (true) {
+    worker_wake_.wait(lock, [&] { return stopping_ || pending_; });
+    if (stopping_) return;
+    // Only the newest: it holds every jump heard so far.
+    const PendingCorrection correction = std::move(*pending_);
+    pending_.reset();
+    correcting_ = true;
+    lock.unlock();
+    const SubmapMoveResult result = fusion_.place(
+        placementsFromCorrections(correction.corrections, fusion_.submaps()), correction.next);
+    countCorrection(result, correction.stamp);
+    lock.lock();
+    correcting_ = false;
+    worker_idle_.notify_all();
+  }
+}
+
+void MapReanchoring::waitForCorrections() {
+  std::unique_lock<std::mutex> lock(worker_mutex_);
+  worker_idle_.wait(lock, [&] { return !pending_ && !correcting_; });
+}
+
+void MapReanchoring::stopCorrecting() {
+  {
+    std::lock_guard<std::mutex> lock(worker_mutex_);
+    stopping_ = true;
+    pending_.reset();
+  }
+  worker_wake_.notify_all();
+  if (worker_.joinable()) worker_.join();
+  std::lock_guard<std::mutex> lock(worker_mutex_);
+  stopping_ = false;
+  worker_idle_.notify_all();
 }
 
 void MapReanchoring::countCorrection(const SubmapMoveResult& result, double stamp) {
@@ -298,6 +356,7 @@ void MapReanchoring::saveThen(std::ostream& out, const std::function<void()>& th
 }
 
 void MapReanchoring::restore(std::istream& in) {
+  stopCorrecting();  // a correction of the submaps before is moot
   {
     // Kept scans belong to the submaps before: the restored ones are re-sampled when they move.
     std::lock_guard<std::mutex> scans(scans_mutex_);
@@ -314,6 +373,7 @@ void MapReanchoring::restore(std::istream& in) {
 }
 
 void MapReanchoring::reset() {
+  stopCorrecting();
   fusion_.reset();
   std::lock_guard<std::mutex> lock(mutex_);
   odometry_.clear();

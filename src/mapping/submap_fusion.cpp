@@ -64,8 +64,9 @@ SubmapFusion::~SubmapFusion() = default;
 
 SubmapFusion::FrameLease SubmapFusion::beginFrame(double stamp) {
   FrameLease lease;
+  // The active submap's id and placement change only under frames_mutex_'s unique lock: read
+  // without mutex_, which a correction holds while it rebuilds the map (frames go on meanwhile).
   lease.lock_ = std::shared_lock<std::shared_mutex>(frames_mutex_);
-  std::lock_guard<std::mutex> lock(mutex_);
   lease.submap_ = active_.id;
   lease.T_map_odom_ = active_.written;
   if (stamp != 0.0) {
@@ -110,6 +111,19 @@ int SubmapFusion::startSubmap() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (activeBlocks() > 0) closeActiveLocked(active_.written);
   return active_.id;
+}
+
+bool SubmapFusion::tryStartSubmap(const std::optional<Eigen::Isometry3d>& T_map_odom) {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_, std::try_to_lock);
+  if (!frames) return false;
+  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (!lock) return false;  // a correction rebuilds the map
+  if (activeBlocks() == 0) {
+    if (T_map_odom) active_.written = active_.placed = *T_map_odom;
+  } else {
+    closeActiveLocked(T_map_odom ? *T_map_odom : active_.written);
+  }
+  return true;
 }
 
 void SubmapFusion::fixWrittenSoFar() {
@@ -275,11 +289,14 @@ std::vector<SubmapInfo> SubmapFusion::submaps() const {
 }
 
 Eigen::AlignedBox3d SubmapFusion::newestBounds() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  std::lock_guard<std::mutex> newest(newest_mutex_);
+  if (!lock) return newest_bounds_;  // a correction rebuilds the map: as last measured
   Eigen::AlignedBox3d box = activeBounds();
   for (int id = static_cast<int>(closed_.size()) - 1; box.isEmpty() && id >= 0; --id) {
     box = boundsOf(id);
   }
+  newest_bounds_ = box;
   return box;
 }
 

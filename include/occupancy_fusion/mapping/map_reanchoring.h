@@ -17,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -27,6 +28,7 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "occupancy_fusion/integrators/laser/polar_laser_integrator.h"
@@ -104,8 +106,12 @@ class MapReanchoring : private LayerDrawer {
 
   // The SLAM system's keyframes (T_map_base of base_frame), the whole optimised path.
   SubmapMoveResult applyPath(const std::vector<StampedPose>& path, double stamp = 0.0);
-  // map -> odom at `stamp` (what placeFrame does with tf's; for callers that have it otherwise).
+  // map -> odom at `stamp`, the submaps moved before it returns (placeFrame does the same with
+  // tf's, but moves them on a thread of its own: waitForCorrections()). For callers that have
+  // map -> odom otherwise.
   SubmapMoveResult applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp = 0.0);
+  // Returns once the corrections placeFrame heard so far have moved the map.
+  void waitForCorrections();
 
   const ReanchoringConfig& config() const { return config_; }
   SubmapFusion& fusion() { return fusion_; }
@@ -126,6 +132,14 @@ class MapReanchoring : private LayerDrawer {
 
  private:
   void countCorrection(const SubmapMoveResult& result, double stamp);
+  // tf's map -> odom taken in: the corrections so far when it jumped.
+  std::optional<std::vector<StampedPose>> noteMapToOdom(const Eigen::Isometry3d& T_map_odom,
+                                                        double stamp);
+  // placeFrame's: the next frames go into a new submap at T_map_odom; the submaps are moved by
+  // correctInTurn(), one correction after another on worker_.
+  void followMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp);
+  void correctInTurn();
+  void stopCorrecting();  // drops a pending correction, waits for a running one
   void startSubmapIfDue(const Eigen::Vector3d& position, double stamp);
 
   bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) override;
@@ -157,6 +171,17 @@ class MapReanchoring : private LayerDrawer {
   OdometryTrack odometry_;
   std::vector<StampedPose> map_to_odom_;  // tf's map -> odom: the first, then at each jump
   bool started_ = false;
+  // The correcting thread (tf): the newest correction not applied yet, and whether one runs.
+  struct PendingCorrection {
+    std::vector<StampedPose> corrections;
+    Eigen::Isometry3d next;  // where the frames are written from then on
+    double stamp = 0.0;
+  };
+  std::mutex worker_mutex_;
+  std::condition_variable worker_wake_, worker_idle_;
+  std::optional<PendingCorrection> pending_;
+  bool correcting_ = false, stopping_ = false;
+  std::thread worker_;
   Eigen::Vector3d submap_start_position_ = Eigen::Vector3d::Zero();
   double submap_start_stamp_ = 0.0;
   ReanchoringStatistics statistics_;

@@ -122,6 +122,9 @@ class SubmapFusion {
   // nothing is reused.
   int startSubmap(const Eigen::Isometry3d& T_map_odom);
   int startSubmap();
+  // The same (T_map_odom absent: the active one's), unless a correction is rebuilding the map or
+  // frames are being closed: then nothing, and false, at once.
+  bool tryStartSubmap(const std::optional<Eigen::Isometry3d>& T_map_odom);
   // What the map holds so far (e.g. a saved map just loaded) becomes a fixed submap, never moved.
   void fixWrittenSoFar();
 
@@ -135,7 +138,8 @@ class SubmapFusion {
 
   std::vector<SubmapInfo> submaps() const;
   // The map-frame box (where written) of the newest blocks: the active submap's, else those of
-  // the last submap that has any; empty when there are none.
+  // the last submap that has any; empty when there are none. While a correction rebuilds the map,
+  // the box measured last.
   Eigen::AlignedBox3d newestBounds() const;
   int activeSubmap() const;
   // The laser layer's moved submaps are drawn by `drawer` from now on (nullptr: re-sampled); it
@@ -198,6 +202,8 @@ class SubmapFusion {
   std::vector<Meta> closed_;  // by id
   Meta active_;               // id closed_.size(); its stamps also change under stamp_mutex_
   mutable std::mutex stamp_mutex_;
+  mutable std::mutex newest_mutex_;
+  mutable Eigen::AlignedBox3d newest_bounds_;  // newestBounds()' last
 };
 
 }  // namespace occupancy_fusion

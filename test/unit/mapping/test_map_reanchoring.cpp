@@ -230,6 +230,7 @@ TEST_F(MapReanchoringDrive, TodaysMapKeepsTheDriftedWalls) {
 TEST_F(MapReanchoringDrive, MapToOdomJumpsSpreadOverTheirStretchCorrectTheMap) {
   MappingSession session(sessionConfig(ReanchoringConfig::Source::kTf), &poses(), nullptr);
   for (int k = 0; k < kFrames; ++k) feed(drive(), k, false, &session);
+  session.reanchoring()->waitForCorrections();
   const Agreement ours = agreement(session, *truth_), today = agreement(*today_, *truth_);
   EXPECT_GT(ours.coverage, 0.97);
   EXPECT_GT(ours.genuine, 0.97);
@@ -368,6 +369,7 @@ TEST_F(MapReanchoringDrive, WithoutCorrectionsTheMapIsTodaysVoxelForVoxel) {
     feed(drive(), k, false, &plain);
     feed(drive(), k, false, &reanchored);
   }
+  reanchored.reanchoring()->waitForCorrections();
   std::map<std::tuple<int, int, int>, float> a, b;
   plain.map().forEachKnownVoxel([&](const VoxelIndex& i, float v) {
     a[{i.x(), i.y(), i.z()}] = v;
