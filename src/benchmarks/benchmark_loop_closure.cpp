@@ -74,14 +74,14 @@ void printRun(const LoopClosureResult& result, const LoopClosureRun& run) {
       "coverage=%.3f coverage_x_true_poses=%.3f "
       "projected_iou=%.3f projected_within_one_cell=%.3f occupied=%zu depth_ms=%.2f laser_ms=%.2f "
       "stereo_ms=%.2f "
-      "map_mb=%.1f submaps=%zu submap_mb=%.1f slowest_correction_ms=%.0f\n",
+      "map_mb=%.1f submaps=%zu submap_mb=%.1f slowest_move_ms=%.0f slowest_correction_ms=%.0f\n",
       loopClosureMappingName(run.mapping), result.setup.resolution, result.frames, run.corrections,
       q.false_occupied, truth_false > 0 ? q.false_occupied / truth_false : 0.0,
       today_excess > 0 ? excess / today_excess : 0.0, q.coverage,
       truth.last.coverage > 0 ? q.coverage / truth.last.coverage : 0.0, q.grid_iou,
       q.grid_agreement, q.occupied, run.depth_ms, run.laser_ms, run.stereo_ms,
       run.map_bytes / 1048576.0, run.submaps, run.submap_bytes / 1048576.0,
-      1e3 * run.slowest_correction_seconds);
+      1e3 * run.slowest_move_seconds, 1e3 * run.slowest_correction_seconds);
 }
 
 void writeCurves(const LoopClosureResult& result, const std::string& path) {

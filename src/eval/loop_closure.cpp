@@ -370,6 +370,7 @@ LoopClosureRun mapOnce(const sim::Scene& scene, const LoopClosureCase& setup, co
     const ReanchoringStatistics statistics = reanchoring->statistics();
     run.corrections = statistics.corrections;
     run.slowest_correction_seconds = statistics.slowest_correction_seconds;
+    run.slowest_move_seconds = statistics.slowest_move_seconds;
   }
   return run;
 }

@@ -304,6 +304,8 @@ void MapReanchoring::countCorrection(const SubmapMoveResult& result, double stam
   statistics_.last_correction_seconds = result.seconds;
   statistics_.slowest_correction_seconds =
       std::max(statistics_.slowest_correction_seconds, result.seconds);
+  statistics_.slowest_move_seconds =
+      std::max(statistics_.slowest_move_seconds, result.moved_seconds);
   statistics_.last_correction_stamp = stamp;
 }
 

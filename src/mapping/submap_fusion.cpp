@@ -193,16 +193,29 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
   }
   std::vector<SubmapPlacement> placed;
   for (const Meta& submap : closed_) placed.push_back({submap.written, submap.placed});
-  // The voxels and the laser layer are rebuilt side by side: they share nothing.
+  // First every moved submap re-sampled at its place, the voxels and the laser layer side by side
+  // (they share nothing): the map follows the correction at once.
   auto voxels =
       std::async(std::launch::async, [&] { stores_->voxels.rebuild(touched_blocks, placed); });
   if (stores_->tiles) {
-    moveTiles(moved, placed, &touched_tiles);
+    for (int id : moved) stores_->tiles->move(id, placed[id], &touched_tiles);
     stores_->tiles->rebuild(touched_tiles, placed);
   }
   voxels.get();
+  const auto seconds_since = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  result.moved_seconds = seconds_since();
+  // Then the laser layer's moved submaps drawn again from their scans: its thin walls where a map
+  // made at the new placements has them (one submap after another: the slower part).
+  if (stores_->tiles && drawer_ != nullptr && !moved.empty()) {
+    SpatialKeySet drawn_tiles;
+    drawTiles(moved, placed, &drawn_tiles);
+    stores_->tiles->rebuild(drawn_tiles, placed);
+    touched_tiles.insert(drawn_tiles.begin(), drawn_tiles.end());
+  }
   result.blocks_rewritten = touched_blocks.size() + touched_tiles.size();
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = seconds_since();
   return result;
 }
 
@@ -211,40 +224,35 @@ void SubmapFusion::setLayerDrawer(LayerDrawer* drawer) {
   drawer_ = drawer;
 }
 
-void SubmapFusion::moveTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
+void SubmapFusion::drawTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
                              SpatialKeySet* touched) {
-  // Drawn anew where the drawer can, re-sampled where it cannot. In the order written, each on
-  // what the submaps before it hold there now: a cell's updates are then clamped in the order a
-  // single pass over the scans clamps them (drawn from unknown and added, a wall that a later
-  // submap's scans cleared stays occupied, measured: docs/loop_closures.md).
+  // In the order written, each on what the submaps before it hold there now: a cell's updates
+  // are then clamped in the order a single pass over the scans clamps them (drawn from unknown
+  // and added, a wall that a later submap's scans cleared stays occupied). Submaps the drawer
+  // keeps nothing for stay re-sampled.
   std::sort(moved.begin(), moved.end());
   GridLayer2DConfig config = layer_->config();
   config.max_memory_bytes = 0;
   for (int id : moved) {
     const SubmapPlacement& placement = placed[static_cast<std::size_t>(id)];
-    if (drawer_ != nullptr) {
-      const std::vector<TileIndex> reach = stores_->tiles->reach(id, placement);
-      const std::vector<GridTile> before = stores_->tiles->foldBefore(id, reach, placed);
-      GridLayer2D layer(config);
-      SpatialKeyMap<std::size_t> position;
-      for (std::size_t i = 0; i < reach.size(); ++i) {
-        position.emplace(packKey(reach[i]), i);
-        if (before[i].known_count > 0) layer.restoreTile(reach[i], before[i]);
-      }
-      if (drawer_->draw(id, placement.placed, &layer)) {
-        std::vector<TileIndex> indices;
-        std::vector<GridTile> from, to;
-        layer.forEachTile([&](const TileIndex& index, const GridTile& after) {
-          const auto found = position.find(packKey(index));
-          indices.push_back(index);
-          from.push_back(found == position.end() ? GridTile() : before[found->second]);
-          to.push_back(after);
-        });
-        stores_->tiles->redraw(id, indices, from, to, placement, touched);
-        continue;
-      }
+    const std::vector<TileIndex> reach = stores_->tiles->reach(id, placement);
+    const std::vector<GridTile> before = stores_->tiles->foldBefore(id, reach, placed);
+    GridLayer2D layer(config);
+    SpatialKeyMap<std::size_t> position;
+    for (std::size_t i = 0; i < reach.size(); ++i) {
+      position.emplace(packKey(reach[i]), i);
+      if (before[i].known_count > 0) layer.restoreTile(reach[i], before[i]);
     }
-    stores_->tiles->move(id, placement, touched);
+    if (!drawer_->draw(id, placement.placed, &layer)) continue;
+    std::vector<TileIndex> indices;
+    std::vector<GridTile> from, to;
+    layer.forEachTile([&](const TileIndex& index, const GridTile& after) {
+      const auto found = position.find(packKey(index));
+      indices.push_back(index);
+      from.push_back(found == position.end() ? GridTile() : before[found->second]);
+      to.push_back(after);
+    });
+    stores_->tiles->redraw(id, indices, from, to, placement, touched);
   }
 }
 

@@ -398,6 +398,7 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
                reanchoring->fusion().memoryBytes() + reanchoring->keptScanBytes());
     status.add("corrections applied", corrections.corrections);
     status.add("submaps moved", corrections.submaps_moved);
+    status.add("slowest correction, map moved (ms)", 1e3 * corrections.slowest_move_seconds);
     status.add("slowest correction (ms)", 1e3 * corrections.slowest_correction_seconds);
     status.add("last path keyframes", corrections.path_keyframes);
     status.add("last path keyframes matched with the odometry", corrections.path_corrections);

@@ -65,9 +65,10 @@ struct LoopClosureRun {
   std::size_t map_bytes = 0;                         // voxels and laser layer
   std::size_t submap_bytes = 0;                      // the submaps' changes (reanchored runs)
   std::size_t submaps = 0;
-  std::size_t corrections = 0;  // that moved a submap
-  double slowest_correction_seconds = 0.0;
-  OccupancyRaster final_grid;  // projected_map after the last frame
+  std::size_t corrections = 0;              // that moved a submap
+  double slowest_correction_seconds = 0.0;  // laser cells drawn again included
+  double slowest_move_seconds = 0.0;        // until the map was re-sampled at the new places
+  OccupancyRaster final_grid;               // projected_map after the last frame
 };
 
 struct LoopClosureResult {

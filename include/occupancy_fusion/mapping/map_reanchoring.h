@@ -67,9 +67,10 @@ struct ReanchoringStatistics {
   std::size_t submaps_moved = 0;     // in all
   std::size_t blocks_rewritten = 0;  // blocks and tiles of the fused map, in all
   double last_correction_seconds = 0.0;
-  double slowest_correction_seconds = 0.0;
-  double last_correction_stamp = 0.0;  // s, the frame or path that brought it
-  std::size_t path_keyframes = 0;      // of the last path, and those matched with the odometry
+  double slowest_correction_seconds = 0.0;  // until the laser layer was drawn again as well
+  double slowest_move_seconds = 0.0;        // until the map was re-sampled at the new places
+  double last_correction_stamp = 0.0;       // s, the frame or path that brought it
+  std::size_t path_keyframes = 0;           // of the last path, and those matched with the odometry
   std::size_t path_corrections = 0;
   std::size_t map_to_odom_jumps = 0;  // tf's map -> odom changes beyond min_shift (a voxel)
 };

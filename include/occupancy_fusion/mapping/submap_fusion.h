@@ -75,7 +75,10 @@ double largestShift(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& wri
 struct SubmapMoveResult {
   std::size_t moved = 0;             // submaps re-placed
   std::size_t blocks_rewritten = 0;  // blocks of the fused map rebuilt
-  double seconds = 0.0;              // wall time, rebuild included
+  // s, wall time until the moved submaps were in the map re-sampled at their new places, and
+  // until their laser cells were drawn again from their scans as well (all of it)
+  double moved_seconds = 0.0;
+  double seconds = 0.0;
 };
 
 // What draws a submap's part of the laser layer anew at another placement, from what its scans
@@ -178,9 +181,9 @@ class SubmapFusion {
   // By value: callers pass the active submap's own placement, which closing it replaces.
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
   void restoreLocked(std::istream& in);
-  // The moved submaps' laser tiles: drawn anew by drawer_ when it can, else re-sampled.
-  // `placed`: every closed submap's placement, by id.
-  void moveTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
+  // The moved submaps' laser tiles drawn anew by drawer_ where it can (they are re-sampled
+  // already). `placed`: every closed submap's placement, by id.
+  void drawTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
                  SpatialKeySet* touched);
   void fixContentsLocked();    // the map's contents become one fixed submap, nothing else
   void adoptContentsLocked();  // what the map holds, if anything, as fixed submap 0
