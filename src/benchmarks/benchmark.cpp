@@ -417,6 +417,7 @@ const std::vector<Workload>& workloads() {
       {"loop-closure",
        "[--resolution R] [--step M] [--laps L] [--drift_scale X] [--drift_seed K]\n"
        "      [--closure_radius M] [--correct_every N] [--submap_distance M]\n"
+       "      [--stretch_x X] [--stretch_y Y] (the floor 40 x 25 m times X, Y; 1.5, 1.6: 60 x 40)\n"
        "      [--sensors depth,laser,stereo] [--evaluate_every N] [--curves CSV] [--grids PREFIX]\n"
        "      [--config FILE ...] (default: the shipped depth, laser, disparity and map server\n"
        "      configs)\n"
@@ -430,7 +431,7 @@ const std::vector<Workload>& workloads() {
        "      projected_map's IoU with the true-pose map, mapper times, memory, correction time",
        {"resolution", "step", "laps", "drift_scale", "drift_seed", "closure_radius",
         "correct_every", "submap_distance", "sensors", "evaluate_every", "curves", "grids",
-        "config", "carmen", "path_every", "max_scans"},
+        "config", "carmen", "path_every", "max_scans", "stretch_x", "stretch_y"},
        runLoopClosure},
   };
   return table;

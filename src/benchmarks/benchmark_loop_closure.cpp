@@ -47,6 +47,8 @@ LoopClosureCase caseFrom(const CommandLine& args) {
       args.doubleValue("closure_radius", setup.localisation.closure_radius);
   setup.localisation.correct_every_frames = args.intValue("correct_every", 0);
   setup.submap_distance = args.doubleValue("submap_distance", setup.submap_distance);
+  setup.stretch =
+      Eigen::Vector2d(args.doubleValue("stretch_x", 1.0), args.doubleValue("stretch_y", 1.0));
   setup.evaluate_every = args.intValue("evaluate_every", setup.evaluate_every);
   const std::string sensors = args.value("sensors", "depth,laser,stereo");
   setup.depth = sensors.find("depth") != std::string::npos;

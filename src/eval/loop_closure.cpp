@@ -492,6 +492,10 @@ void LoopClosureCase::validate() const {
   }
   if (evaluate_every < 1) throw std::invalid_argument("evaluate_every must be >= 1");
   if (!depth && !lasers && !stereo) throw std::invalid_argument("no sensor");
+  // Narrower, the corridor would pass closer than its 1 m clearance; wider, not a floor.
+  if (!(stretch.minCoeff() >= 1.0 && stretch.maxCoeff() <= 10.0)) {
+    throw std::invalid_argument("loop closure case: the stretch must be within [1, 10]");
+  }
   drift.validate();
   localisation.validate();
 }
@@ -516,10 +520,10 @@ LoopClosureResult evaluateLoopClosure(const LoopClosureCase& setup,
   setup.validate();
   LoopClosureResult result;
   result.setup = setup;
-  const sim::Scene scene = sim::makeBuildingFloorScene();
+  const sim::Scene scene = sim::stretchedInPlane(sim::makeBuildingFloorScene(), setup.stretch);
   Drive drive;
   drive.rate_hz = setup.rate_hz;
-  drive.truth = sim::buildingLoopPath(setup.step, setup.laps);
+  drive.truth = sim::buildingLoopPath(setup.step, setup.laps, setup.stretch);
   drive.odometry = sim::driftedOdometry(drive.truth, setup.drift);
   drive.track = sim::runLocalisation(drive.truth, drive.odometry, setup.localisation);
   result.frames = static_cast<int>(drive.truth.size());

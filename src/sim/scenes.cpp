@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <initializer_list>
+#include <stdexcept>
+#include <type_traits>
+#include <variant>
 
 #include "occupancy_fusion/sim/trajectory.h"
 
@@ -242,6 +245,41 @@ Eigen::AlignedBox2d buildingLoopCentreLine() {
 
 std::vector<Eigen::Isometry3d> buildingLoopPath(double step_m, double laps) {
   return roundedRectanglePath(buildingLoopCentreLine(), kLoopCornerRadius, 0.0, step_m, laps);
+}
+
+std::vector<Eigen::Isometry3d> buildingLoopPath(double step_m, double laps,
+                                                const Eigen::Vector2d& stretch) {
+  const Eigen::AlignedBox2d line = buildingLoopCentreLine();
+  const Eigen::AlignedBox2d stretched(line.min().cwiseProduct(stretch),
+                                      line.max().cwiseProduct(stretch));
+  return roundedRectanglePath(stretched, kLoopCornerRadius, 0.0, step_m, laps);
+}
+
+Scene stretchedInPlane(const Scene& scene, const Eigen::Vector2d& stretch) {
+  if (!(stretch.minCoeff() > 0.0) || !stretch.allFinite()) {
+    throw std::invalid_argument("stretchedInPlane: the stretch must be finite and > 0");
+  }
+  const Eigen::Vector3d factor(stretch.x(), stretch.y(), 1.0);
+  Scene stretched;
+  for (const Primitive& primitive : scene.primitives()) {
+    std::visit(
+        [&](auto shape) {
+          using Shape = decltype(shape);
+          if constexpr (std::is_same_v<Shape, Box>) {
+            shape.T_world_box.translation() = shape.T_world_box.translation().cwiseProduct(factor);
+            if (shape.T_world_box.linear().isIdentity(1e-12)) {
+              shape.half_extents = shape.half_extents.cwiseProduct(factor);
+            }
+          } else if constexpr (std::is_same_v<Shape, Plane>) {
+            shape.point = shape.point.cwiseProduct(factor);  // exact for the floor and walls
+          } else {
+            shape.center = shape.center.cwiseProduct(factor);
+          }
+          stretched.add(shape);
+        },
+        primitive);
+  }
+  return stretched;
 }
 
 double buildingLoopLength() {

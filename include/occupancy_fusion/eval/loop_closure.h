@@ -12,6 +12,7 @@
 // loop-closure` and the tests.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <iosfwd>
 #include <string>
@@ -38,6 +39,8 @@ struct LoopClosureCase {
   bool depth = true, lasers = true, stereo = true;
   int evaluate_every = 25;       // frames between the points of the curves (and the last frame)
   double submap_distance = 4.0;  // m (reanchoring/submap_distance)
+  // The building floor stretched in x and y (sim::stretchedInPlane): (1.5, 1.6) is 60 x 40 m.
+  Eigen::Vector2d stretch = Eigen::Vector2d::Ones();
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };

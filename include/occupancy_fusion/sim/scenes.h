@@ -87,6 +87,11 @@ Scene makeOfficeScene();
 Scene makeBuildingFloorScene();
 Eigen::AlignedBox2d buildingLoopCentreLine();  // x in [-15, 15], y in [-7.5, 7.5]
 
+// A larger (or smaller) floor of the same plan: every position x, y times `stretch`'s x and y,
+// and axis-aligned boxes (walls, tables, cabinets) stretched with it; spheres, cylinders and
+// turned boxes keep their size. Stretched by (1.5, 1.6): a 60 x 40 m floor, a 138 m loop.
+Scene stretchedInPlane(const Scene& scene, const Eigen::Vector2d& stretch);
+
 // Robot (body) poses every step_m metres along the building's corridor loop for `laps` laps
 // (roundedRectanglePath of buildingLoopCentreLine() with 1 m corner arcs: 88.28 m per lap):
 // from (0, -7.5) in the south corridor heading +x, counter-clockwise (east, north, west, south),
@@ -95,6 +100,9 @@ Eigen::AlignedBox2d buildingLoopCentreLine();  // x in [-15, 15], y in [-7.5, 7.
 // step_m > 0 and laps >= 0.
 std::vector<Eigen::Isometry3d> buildingLoopPath(double step_m = 0.2, double laps = 1.25);
 double buildingLoopLength();  // m per lap
+// The same on the stretched floor (stretchedInPlane): the centre line stretched, 1 m corner arcs.
+std::vector<Eigen::Isometry3d> buildingLoopPath(double step_m, double laps,
+                                                const Eigen::Vector2d& stretch);
 
 }  // namespace sim
 }  // namespace occupancy_fusion

@@ -132,6 +132,29 @@ TEST(BuildingFloorTest, LoopPathGoesRoundTheCorridor) {
   EXPECT_NEAR(longer.back().translation().x(), 15.0, 1e-9);  // on the east side
 }
 
+// Stretched to 60 x 40 m: walls, doorways and the corridor where the plan puts them times the
+// stretch, the things that stand in rooms at their size, the loop still clear of everything.
+TEST(BuildingFloorTest, StretchedFloorKeepsItsPlan) {
+  const Eigen::Vector2d stretch(1.5, 1.6);
+  const Scene scene = stretchedInPlane(makeBuildingFloorScene(), stretch);
+  EXPECT_TRUE(scene.bounds().min().isApprox(Eigen::Vector3d(-30, -20, 0)));
+  EXPECT_TRUE(scene.bounds().max().isApprox(Eigen::Vector3d(30, 20, 2.5)));
+  // The spine wall along y = 0 (0.15 m thick, 0.24 stretched) and its doorway at x = -9.5.
+  EXPECT_TRUE(scene.isOccupied({0.0 * 1.5, 0.0, 1.0}));
+  EXPECT_TRUE(scene.isOccupied({3.0 * 1.5, 0.11, 1.0}));
+  EXPECT_FALSE(scene.isOccupied({-9.5 * 1.5, 0.0, 1.0}));
+  // The sphere of r = 0.4 m at (-2.5, 4.8, 0.4) keeps its radius.
+  EXPECT_NEAR(scene.distanceToSurface({-2.5 * 1.5, 4.8 * 1.6, 1.3}), 0.5, 1e-9);
+  const std::vector<Eigen::Isometry3d> path = buildingLoopPath(0.2, 1.0, stretch);
+  const double length = 2.0 * (30.0 * 1.5 + 15.0 * 1.6) - 8.0 + 2.0 * M_PI;
+  EXPECT_NEAR(0.2 * static_cast<double>(path.size() - 1), length, 0.2);
+  for (const Eigen::Isometry3d& pose : path) {
+    ASSERT_GE(scene.distanceToSurface(pose.translation() + Eigen::Vector3d(0, 0, 1)), 0.6)
+        << pose.translation().transpose();
+  }
+  EXPECT_THROW(stretchedInPlane(scene, Eigen::Vector2d(0.0, 1.0)), std::invalid_argument);
+}
+
 TEST(BuildingFloorTest, RoundedRectanglePathChecksItsArguments) {
   const Eigen::AlignedBox2d box(Eigen::Vector2d(0, 0), Eigen::Vector2d(4, 2));
   EXPECT_EQ(roundedRectanglePath(box, 0.5, 2.0, 0.1, 0.0).size(), 1u);
