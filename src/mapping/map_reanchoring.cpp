@@ -27,6 +27,13 @@ void requirePositive(double value, const char* name, bool zero_allowed) {
                               std::to_string(value));
 }
 
+// The submaps spill (reanchoring/max_memory_mb) next to the map's spill store when it has one.
+SubmapFusionConfig fusionConfig(const ReanchoringConfig& config, const VoxelMap& map) {
+  SubmapFusionConfig fusion = config.fusion;
+  if (fusion.spill_folder.empty()) fusion.spill_folder = map.config().spill_folder;
+  return fusion;
+}
+
 }  // namespace
 
 const char* sourceName(ReanchoringConfig::Source source) {
@@ -69,6 +76,13 @@ ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
   source.get("reanchoring/submap_distance", &config.submap_distance);
   source.get("reanchoring/submap_seconds", &config.submap_seconds);
   source.get("reanchoring/min_shift", &config.fusion.min_shift);
+  double max_memory_mb = 0.0;
+  source.get("reanchoring/max_memory_mb", &max_memory_mb);
+  if (!(max_memory_mb >= 0.0) || !std::isfinite(max_memory_mb)) {
+    throw std::invalid_argument("reanchoring/max_memory_mb must be >= 0 (0: unbounded), got " +
+                                std::to_string(max_memory_mb));
+  }
+  config.fusion.max_memory_bytes = static_cast<std::size_t>(max_memory_mb * 1048576.0);
   source.get("reanchoring/max_odometry_gap", &config.trajectory.max_odometry_gap);
   config.validate();
   return config;
@@ -76,7 +90,7 @@ ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
 
 MapReanchoring::MapReanchoring(VoxelMap* map, GridLayer2D* layer, const ReanchoringConfig& config)
     : config_(config),
-      fusion_(map, layer, config.fusion),
+      fusion_(map, layer, fusionConfig(config, *map)),
       // tf's map -> odom wanders by millimetres with every localisation update (AMCL): a jump is
       // a voxel unless set, so that those are not each taken as a correction.
       jump_shift_(config.fusion.min_shift > 0.0 ? config.fusion.min_shift : map->resolution()),
@@ -195,8 +209,9 @@ void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double st
         stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
     if (!due) return;
   }
-  // While a correction rebuilds the map, the next frame tries again: this one is not held up.
-  if (!fusion_.tryStartSubmap(std::nullopt)) return;
+  // Where it is due, whatever a correction being applied costs this frame: a submap that ran on
+  // would carry more of the odometry's drift (it is placed rigidly).
+  fusion_.startSubmap();
   std::lock_guard<std::mutex> lock(mutex_);
   submap_start_position_ = position;
   submap_start_stamp_ = stamp;
@@ -232,13 +247,16 @@ std::optional<std::vector<StampedPose>> MapReanchoring::noteMapToOdom(
   map_to_odom_.push_back({stamp, T_map_odom});
   std::stable_sort(map_to_odom_.begin(), map_to_odom_.end(),
                    [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
-  corrections_ = map_to_odom_;
   return map_to_odom_;
 }
 
 SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
   const std::optional<std::vector<StampedPose>> corrections = noteMapToOdom(T_map_odom, stamp);
   if (!corrections) return {};
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    corrections_ = *corrections;  // where the kept scans are drawn
+  }
   const SubmapMoveResult result =
       fusion_.place(placementsFromCorrections(*corrections, fusion_.submaps()), T_map_odom);
   countCorrection(result, stamp);
@@ -248,10 +266,10 @@ SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_o
 void MapReanchoring::followMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
   std::optional<std::vector<StampedPose>> corrections = noteMapToOdom(T_map_odom, stamp);
   if (!corrections) return;
-  // The frames from now on go into a new submap at the new correction at once (or, while a
-  // correction rebuilds the map, once it is done: place()'s `next`); the submaps before are
-  // moved on the correcting thread, while this sensor's frames go on.
-  fusion_.tryStartSubmap(T_map_odom);
+  // The frames from now on go into a new submap at the new correction (after a correction still
+  // rebuilding the map, if one is: frames written at the old one would stretch across the jump);
+  // the submaps before are moved on the correcting thread, while this sensor's frames go on.
+  fusion_.startSubmap(T_map_odom);
   std::lock_guard<std::mutex> lock(worker_mutex_);
   pending_ = PendingCorrection{std::move(*corrections), T_map_odom, stamp};
   if (!worker_.joinable()) worker_ = std::thread([this] { correctInTurn(); });
@@ -268,6 +286,10 @@ void MapReanchoring::correctInTurn() {
     pending_.reset();
     correcting_ = true;
     lock.unlock();
+    {
+      std::lock_guard<std::mutex> corrections(mutex_);
+      corrections_ = correction.corrections;  // the scans drawn by this one, not a newer one
+    }
     const SubmapMoveResult result = fusion_.place(
         placementsFromCorrections(correction.corrections, fusion_.submaps()), correction.next);
     countCorrection(result, correction.stamp);

@@ -17,6 +17,8 @@
 #include <mutex>
 #include <optional>
 #include <ostream>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -25,6 +27,7 @@
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/map/stored_block.h"
 #include "occupancy_fusion/map/voxel_map.h"
+#include "submap_spill_file.h"
 
 namespace occupancy_fusion {
 
@@ -185,9 +188,42 @@ class StoreSubmaps {
   }
   bool holdsContents() const { return Traits::count(*store_) > 0; }
   const Eigen::AlignedBox3d& bounds(int id) const { return records_[id].bounds; }
-  std::size_t blocks(int id) const { return records_[id].changes.size(); }
+  std::size_t blocks(int id) const { return records_[id].blockCount(); }
+  bool spilled(int id) const { return records_[id].spilled; }
   std::size_t bytes(int id) const { return records_[id].bytes; }
   std::size_t records() const { return records_.size(); }
+
+  std::size_t inMemoryBytes() const {
+    std::size_t bytes = 0;
+    for (const Record& record : records_) bytes += record.spilled ? 0 : record.bytes;
+    return bytes;
+  }
+
+  // The oldest in-memory records written to `spill` until the records in memory take at most
+  // `budget` bytes (the newest stays). Returns the bytes written to it.
+  std::size_t spillOldest(std::size_t budget, SubmapSpillFile* spill) {
+    spill_ = spill;
+    std::size_t in_memory = inMemoryBytes();
+    std::size_t written = 0;
+    for (std::size_t id = 0; id + 1 < records_.size() && in_memory > budget; ++id) {
+      Record& record = records_[id];
+      if (record.spilled || record.changes.empty()) continue;
+      std::string bytes;
+      for (const auto& entry : record.changes) {
+        bytes.clear();
+        entry.second.appendPackedTo(&bytes);
+        const std::uint64_t offset = spill->append(bytes);
+        record.slots.emplace(entry.first,
+                             SpillSlot{offset, static_cast<std::uint32_t>(bytes.size())});
+        written += bytes.size();
+      }
+      in_memory -= record.bytes;
+      record.changes = SpatialKeyMap<typename Traits::Stored>();
+      record.spilled = true;
+      record.bytes = record.slots.size() * (sizeof(SpillSlot) + kTableSlotBytes);
+    }
+    return written;
+  }
 
   // Submap `id` re-placed: its coverage follows; the store's blocks it covered and covers are
   // added to `touched`.
@@ -309,11 +345,11 @@ class StoreSubmaps {
         out.write(reinterpret_cast<const char*>(record.drawn_at->matrix().data()),
                   16 * sizeof(double));
       }
-      writeValue(out, static_cast<std::uint64_t>(record.changes.size()));
-      for (const auto& entry : record.changes) {
-        writeValue(out, entry.first);
-        entry.second.writeTo(out);
-      }
+      writeValue(out, static_cast<std::uint64_t>(record.blockCount()));
+      forEachStored(record, [&](std::uint64_t key, const typename Traits::Stored& stored) {
+        writeValue(out, key);
+        stored.writeTo(out);
+      });
     }
   }
   bool readRecords(std::istream& in, std::size_t expected) {
@@ -384,9 +420,18 @@ class StoreSubmaps {
     const double cell_side;
   };
 
+  // Where a spilled block's changes lie in the spill file.
+  struct SpillSlot {
+    std::uint64_t offset = 0;
+    std::uint32_t size = 0;
+  };
+
   struct Record {
+    // In memory, or (spilled) in the spill file with only where each block's changes lie here.
     SpatialKeyMap<typename Traits::Stored> changes;
-    std::size_t bytes = 0;
+    SpatialKeyMap<SpillSlot> slots;
+    bool spilled = false;
+    std::size_t bytes = 0;                 // of memory
     Eigen::AlignedBox3d bounds;            // of its blocks, where written
     std::vector<std::uint64_t> footprint;  // the store's blocks its placed changes reach
     // Set when the changes were drawn anew from the submap's measurements at this placement
@@ -398,7 +443,50 @@ class StoreSubmaps {
       bounds.extend(containerBox(index, cell_side));
       changes.emplace(Traits::key(index), std::move(stored));
     }
+    std::size_t blockCount() const { return spilled ? slots.size() : changes.size(); }
   };
+
+  template <class Fn>
+  static void forEachKey(const Record& record, Fn fn) {
+    if (record.spilled) {
+      for (const auto& entry : record.slots) fn(entry.first);
+    } else {
+      for (const auto& entry : record.changes) fn(entry.first);
+    }
+  }
+  // The changes of block `key` of a record, read back from the spill file if it is there; false
+  // when the record changed no such block.
+  bool storedOf(const Record& record, std::uint64_t key, typename Traits::Stored* out) const {
+    if (!record.spilled) return false;
+    auto it = record.slots.find(key);
+    if (it == record.slots.end()) return false;
+    thread_local std::string bytes;
+    spill_->read(it->second.offset, it->second.size, &bytes);
+    if (!out->readPacked(bytes)) throw std::runtime_error("submaps: a damaged spill file");
+    return true;
+  }
+  // Block `key`'s changes expanded into *scratch; nullptr when the record changed no such block.
+  const Cells* changesOf(const Record& record, std::uint64_t key, Cells* scratch) const {
+    if (record.spilled) {
+      typename Traits::Stored stored;
+      if (!storedOf(record, key, &stored)) return nullptr;
+      return &Traits::view(stored, scratch);
+    }
+    auto it = record.changes.find(key);
+    return it == record.changes.end() ? nullptr : &Traits::view(it->second, scratch);
+  }
+  template <class Fn>
+  void forEachStored(const Record& record, Fn fn) const {
+    if (!record.spilled) {
+      for (const auto& entry : record.changes) fn(entry.first, entry.second);
+      return;
+    }
+    for (const auto& entry : record.slots) {
+      typename Traits::Stored stored;
+      storedOf(record, entry.first, &stored);
+      fn(entry.first, stored);
+    }
+  }
 
   static constexpr std::size_t kTableSlotBytes = 24;  // a hash table entry, about
 
@@ -438,15 +526,15 @@ class StoreSubmaps {
     const SubmapPlacement placement = effective(record, submap_placement);
     std::vector<std::uint64_t> keys;
     if (placement.atWrittenPlace()) {
-      for (const auto& entry : record.changes) keys.push_back(entry.first);
+      forEachKey(record, [&](std::uint64_t key) { keys.push_back(key); });
       return keys;
     }
     // Each changed block's corners moved: the blocks of their bounding box.
     const Eigen::Isometry3d moved = placement.placed * placement.written.inverse();
     const double side = cellSide() * Traits::side();
     SpatialKeySet reached;
-    for (const auto& entry : record.changes) {
-      const Eigen::AlignedBox3d box = containerBox(Traits::unkey(entry.first), cellSide());
+    forEachKey(record, [&](std::uint64_t key) {
+      const Eigen::AlignedBox3d box = containerBox(Traits::unkey(key), cellSide());
       Eigen::AlignedBox3d to;
       for (int i = 0; i < 8; ++i) {
         to.extend(moved * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i)));
@@ -454,7 +542,7 @@ class StoreSubmaps {
       const Index from = Traits::floorIndex(to.min() / side);
       const Index last = Traits::floorIndex(to.max() / side);
       forEachIndexIn(from, last, [&](const Index& index) { reached.insert(Traits::key(index)); });
-    }
+    });
     keys.assign(reached.begin(), reached.end());
     return keys;
   }
@@ -497,7 +585,7 @@ class StoreSubmaps {
   // a moved block of the map's grid covers parts of up to 2^D of the written grid's.
   class SourceCache {
    public:
-    explicit SourceCache(const Record& record) : record_(record) {}
+    SourceCache(const StoreSubmaps& owner, const Record& record) : owner_(owner), record_(record) {}
     // The change of one cell of the written grid (NaN: none, or no such block).
     float change(const Index& cell) {
       const std::uint64_t key = Traits::key(Traits::containerOf(cell));
@@ -511,8 +599,7 @@ class StoreSubmaps {
         next_ = (next_ + 1) % kSlots;
         used_ = std::max(used_, slot + 1);
         keys_[slot] = key;
-        auto it = record_.changes.find(key);
-        source = it == record_.changes.end() ? nullptr : &Traits::view(it->second, &scratch_[slot]);
+        source = owner_.changesOf(record_, key, &scratch_[slot]);
         sources_[slot] = source;
       }
       return source == nullptr ? kNoChange : source->log_odds[Traits::linearOf(cell)];
@@ -521,6 +608,7 @@ class StoreSubmaps {
    private:
     static constexpr int kSlots = 8;
     static constexpr float kNoChange = std::numeric_limits<float>::quiet_NaN();
+    const StoreSubmaps& owner_;
     const Record& record_;
     std::array<std::uint64_t, kSlots> keys_{};
     std::array<const Cells*, kSlots> sources_{};
@@ -539,15 +627,14 @@ class StoreSubmaps {
     const float min = store_->minLogOdds(), max = store_->maxLogOdds();
     if (placement.atWrittenPlace()) {
       Cells scratch;
-      auto it = record.changes.find(Traits::key(index));
-      if (it != record.changes.end()) {
-        addLogOddsChanges(Traits::view(it->second, &scratch), min, max, cells);
+      if (const Cells* changes = changesOf(record, Traits::key(index), &scratch)) {
+        addLogOddsChanges(*changes, min, max, cells);
       }
       return;
     }
     const Eigen::Isometry3d to_written = placement.written * placement.placed.inverse();
     const double resolution = cellSide();
-    auto cache = std::make_unique<SourceCache>(record);
+    auto cache = std::make_unique<SourceCache>(*this, record);
     for (int linear = 0; linear < Traits::kCellCount; ++linear) {
       const Vector center =
           (Traits::cellOf(index, linear).template cast<double>() + Vector::Constant(0.5)) *
@@ -559,6 +646,7 @@ class StoreSubmaps {
   }
 
   Store* store_;
+  SubmapSpillFile* spill_ = nullptr;  // the fusion's, when the submaps have a memory bound
   std::unique_ptr<ActiveWrites> active_;
   std::deque<Record> records_;  // by submap id (a deque: records move, never copy)
   // For every block of the store, the closed submaps whose placed changes reach it, in the order

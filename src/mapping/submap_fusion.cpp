@@ -8,6 +8,7 @@
 #include <string>
 
 #include "store_submaps.h"
+#include "submap_spill_file.h"
 
 namespace occupancy_fusion {
 
@@ -113,19 +114,6 @@ int SubmapFusion::startSubmap() {
   return active_.id;
 }
 
-bool SubmapFusion::tryStartSubmap(const std::optional<Eigen::Isometry3d>& T_map_odom) {
-  std::unique_lock<std::shared_mutex> frames(frames_mutex_, std::try_to_lock);
-  if (!frames) return false;
-  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
-  if (!lock) return false;  // a correction rebuilds the map
-  if (activeBlocks() == 0) {
-    if (T_map_odom) active_.written = active_.placed = *T_map_odom;
-  } else {
-    closeActiveLocked(T_map_odom ? *T_map_odom : active_.written);
-  }
-  return true;
-}
-
 void SubmapFusion::fixWrittenSoFar() {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
@@ -145,6 +133,25 @@ void SubmapFusion::closeActiveLocked(Eigen::Isometry3d next_T_map_odom) {
   stores_->forEach([&](auto& store) { store.cover(closed.id, {closed.written, closed.placed}); });
   active_.id = static_cast<int>(closed_.size());
   active_.written = active_.placed = next_T_map_odom;
+  enforceMemoryBoundLocked();
+}
+
+void SubmapFusion::enforceMemoryBoundLocked() {
+  if (config_.max_memory_bytes == 0) return;
+  const std::size_t tiles = stores_->tiles ? stores_->tiles->inMemoryBytes() : 0;
+  if (stores_->voxels.inMemoryBytes() + tiles <= config_.max_memory_bytes) return;
+  if (!spill_) spill_ = std::make_unique<SubmapSpillFile>(config_.spill_folder);
+  const std::size_t budget = config_.max_memory_bytes;
+  stores_->voxels.spillOldest(budget > tiles ? budget - tiles : 0, spill_.get());
+  if (stores_->tiles) {
+    const std::size_t voxels = stores_->voxels.inMemoryBytes();
+    stores_->tiles->spillOldest(budget > voxels ? budget - voxels : 0, spill_.get());
+  }
+}
+
+std::size_t SubmapFusion::spilledBytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return spill_ ? spill_->bytes() : 0;
 }
 
 void SubmapFusion::placeActiveLocked(const Eigen::Isometry3d& placed,
@@ -214,6 +221,7 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
     stores_->tiles->rebuild(drawn_tiles, placed);
     touched_tiles.insert(drawn_tiles.begin(), drawn_tiles.end());
   }
+  enforceMemoryBoundLocked();  // the records drawn again are in memory
   result.blocks_rewritten = touched_blocks.size() + touched_tiles.size();
   result.seconds = seconds_since();
   return result;
@@ -417,6 +425,7 @@ void SubmapFusion::restoreLocked(std::istream& in) {
   active_ = Meta();
   active_.id = static_cast<int>(closed_.size());
   active_.written = active_.placed = next;
+  enforceMemoryBoundLocked();
 }
 
 void SubmapFusion::adoptContentsLocked() {
@@ -445,6 +454,7 @@ void SubmapFusion::reset() {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   stores_->forEach([](auto& store) { store.reset(); });
+  spill_.reset();
   map_->reset();
   if (layer_ != nullptr) layer_->reset();
   const Eigen::Isometry3d written = active_.written;

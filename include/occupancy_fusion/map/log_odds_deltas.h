@@ -13,6 +13,7 @@
 #include <limits>
 #include <memory>
 #include <ostream>
+#include <string>
 #include <vector>
 
 #include "occupancy_fusion/map/log_odds_cells.h"
@@ -139,6 +140,21 @@ class PackedLogOddsChanges {
     return true;
   }
   std::size_t bytes() const { return sizeof(*this) + packed_size_; }
+  // As kept in memory (the count, then the compressed bytes), appended to *out, and back: what a
+  // spill of the submaps writes and reads. false: not such bytes.
+  void appendPackedTo(std::string* out) const {
+    out->append(reinterpret_cast<const char*>(&count_), sizeof(count_));
+    out->append(packed_.get(), packed_size_);
+  }
+  bool readPacked(const std::string& bytes) {
+    if (bytes.size() < sizeof(count_)) return false;
+    std::memcpy(&count_, bytes.data(), sizeof(count_));
+    if (count_ > static_cast<std::uint32_t>(kCount)) return false;
+    packed_size_ = static_cast<std::uint32_t>(bytes.size() - sizeof(count_));
+    packed_ = packed_size_ > 0 ? std::make_unique<char[]>(packed_size_) : nullptr;
+    if (packed_) std::memcpy(packed_.get(), bytes.data() + sizeof(count_), packed_size_);
+    return count_ == 0 || packed_ != nullptr;
+  }
 
  private:
   static constexpr int kWords = (kCount + 63) / 64;

@@ -50,7 +50,9 @@ struct ReanchoringConfig {
   // active one began (reanchoring/submap_distance, reanchoring/submap_seconds).
   double submap_distance = 4.0;
   double submap_seconds = 60.0;
-  SubmapFusionConfig fusion;              // reanchoring/min_shift
+  // reanchoring/min_shift, reanchoring/max_memory_mb (the submaps' changes in memory; beyond, the
+  // oldest go to a temporary file beside the map's spill_folder, or the system's temporary folder)
+  SubmapFusionConfig fusion;
   TrajectoryCorrectionConfig trajectory;  // reanchoring/max_odometry_gap
 
   bool enabled() const { return source != Source::kNone; }

@@ -28,6 +28,7 @@
 #include <optional>
 #include <ostream>
 #include <shared_mutex>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -43,11 +44,17 @@ struct SubmapFusionConfig {
   // voxel (a laser wall drawn a third of a cell off already lands in other cells: measured on the
   // CARMEN logs, docs/loop_closures.md).
   double min_shift = 0.0;
+  // Bytes of the closed submaps' changes kept in memory (0: all of them): beyond, the oldest
+  // submaps' changes go to a temporary file in spill_folder (empty: the system's temporary
+  // folder) and are read back from it when a correction moves them or what they overlap.
+  std::size_t max_memory_bytes = 0;
+  std::string spill_folder;
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };
 
 struct SubmapPlacement;  // where a submap was written and is shown (store_submaps.h)
+class SubmapSpillFile;
 
 // One submap as diagnostics and the trajectory corrections see it.
 struct SubmapInfo {
@@ -125,9 +132,6 @@ class SubmapFusion {
   // nothing is reused.
   int startSubmap(const Eigen::Isometry3d& T_map_odom);
   int startSubmap();
-  // The same (T_map_odom absent: the active one's), unless a correction is rebuilding the map or
-  // frames are being closed: then nothing, and false, at once.
-  bool tryStartSubmap(const std::optional<Eigen::Isometry3d>& T_map_odom);
   // What the map holds so far (e.g. a saved map just loaded) becomes a fixed submap, never moved.
   void fixWrittenSoFar();
 
@@ -151,7 +155,8 @@ class SubmapFusion {
 
   const SubmapFusionConfig& config() const { return config_; }
   double minShift() const { return min_shift_; }  // m, config().min_shift or a quarter voxel
-  std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
+  std::size_t memoryBytes() const;   // the submaps' changes and the active one's first sights
+  std::size_t spilledBytes() const;  // written to the spill file (max_memory_bytes) so far
 
   // The submaps as bytes, to be saved beside the map (submap_files.h): the active submap is closed
   // first. restore() takes them back once the map and layer hold what was saved with them (their
@@ -185,8 +190,9 @@ class SubmapFusion {
   // already). `placed`: every closed submap's placement, by id.
   void drawTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
                  SpatialKeySet* touched);
-  void fixContentsLocked();    // the map's contents become one fixed submap, nothing else
-  void adoptContentsLocked();  // what the map holds, if anything, as fixed submap 0
+  void fixContentsLocked();         // the map's contents become one fixed submap, nothing else
+  void enforceMemoryBoundLocked();  // the oldest submaps' changes to the spill file
+  void adoptContentsLocked();       // what the map holds, if anything, as fixed submap 0
   // The active submap shown at `placed`; frames from now on written at `next`.
   void placeActiveLocked(const Eigen::Isometry3d& placed, const Eigen::Isometry3d& next);
   Eigen::AlignedBox3d boundsOf(int id) const;
@@ -202,8 +208,9 @@ class SubmapFusion {
   mutable std::mutex mutex_;        // the submaps
   std::unique_ptr<Stores> stores_;
   LayerDrawer* drawer_ = nullptr;
-  std::vector<Meta> closed_;  // by id
-  Meta active_;               // id closed_.size(); its stamps also change under stamp_mutex_
+  std::unique_ptr<SubmapSpillFile> spill_;  // with max_memory_bytes, made at the first spill
+  std::vector<Meta> closed_;                // by id
+  Meta active_;  // id closed_.size(); its stamps also change under stamp_mutex_
   mutable std::mutex stamp_mutex_;
   mutable std::mutex newest_mutex_;
   mutable Eigen::AlignedBox3d newest_bounds_;  // newestBounds()' last
