@@ -43,6 +43,7 @@ int runCheckpoint(const CommandLine& args);          // benchmark_checkpoint.cpp
 int runSpill(const CommandLine& args);               // benchmark_spill.cpp
 int runRobotBudget(const CommandLine& args);         // benchmark_robot_budget.cpp
 int runLoopClosure(const CommandLine& args);         // benchmark_loop_closure.cpp
+int runDynamic(const CommandLine& args);             // benchmark_dynamic.cpp
 
 namespace {
 
@@ -433,6 +434,21 @@ const std::vector<Workload>& workloads() {
         "correct_every", "submap_distance", "sensors", "evaluate_every", "curves", "grids",
         "config", "carmen", "path_every", "max_scans", "stretch_x", "stretch_y"},
        runLoopClosure},
+      {"dynamic",
+       "[--events removed_box,person,door] [--mappers depth,stereo,stereo_table_i,\n"
+       "      stereo_octomap,point_cloud,laser] [--resolution 0.05,0.1] [--speed 0,0.5]\n"
+       "      [--frames_before N] [--frames_after N] [--noise_px P] [--curves CSV] [--config FILE "
+       "...]\n"
+       "      an object leaves a sensor's view in the simulated corridor (a box taken away, a "
+       "person\n"
+       "      walking across at 1 m/s, a door opening), the sensor standing or moving along it: "
+       "the\n"
+       "      ghost voxels (laser cells) it leaves after 1, 3, 5 frames and the frames until "
+       "fewer\n"
+       "      than 5 % of its voxels are left, the corridor's coverage, ms per frame",
+       {"events", "mappers", "resolution", "speed", "frames_before", "frames_after", "noise_px",
+        "curves", "config"},
+       runDynamic},
   };
   return table;
 }
