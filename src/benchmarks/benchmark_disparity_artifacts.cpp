@@ -285,7 +285,8 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
        {std::pair<const char*, bool*>{"measured_fuse_known", &config.measured_fuse_known},
         {"measured_prior", &config.measured_prior},
         {"measured_inside", &config.measured_inside},
-        {"measured_visibility", &config.measured_visibility}}) {
+        {"measured_visibility", &config.measured_visibility},
+        {"clear_passed", &config.clear_passed}}) {
     *field = args.intValue(option, *field) != 0;
   }
   config.validate();

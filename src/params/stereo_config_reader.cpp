@@ -60,6 +60,9 @@ VisibilityStereoConfig readVisibilityStereoConfig(const ParameterSource& source)
   read(source, "measured_grid_fraction", &config.measured_surface.grid_footprint_fraction);
   read(source, "measured_grid_max_px", &config.measured_surface.grid_max_step_px);
   read(source, "inside_stop_probability", &config.inside_stop_probability);
+  read(source, "clear_passed", &config.clear_passed);
+  read(source, "passed_sigmas", &config.passed_sigmas);
+  read(source, "passed_miss_probability", &config.passed_miss_probability);
   read(source, "max_range", &config.max_range);
   read(source, "bundle_rays", &config.bundle_rays);
   read(source, "disparity_sigma_px", &config.disparity.disparity_sigma_px);

@@ -63,8 +63,10 @@ VisibilityStereoConfig visibilityStereoConfigFor(StereoParameterSet set) {
     config.visibility_min = 0.003;
     config.prob_hit_invisible = 0.2;
   }
-  if (set == StereoParameterSet::kMeasured)
+  if (set == StereoParameterSet::kMeasured) {
     config.unknown_neighbours = UnknownNeighbours::kMeasured;
+    config.clear_passed = true;  // what has left the view is cleared in 3-4 frames, not 19-20
+  }
   return config;
 }
 
@@ -118,6 +120,13 @@ void VisibilityStereoConfig::validate() const {
   if (!(unknown_neighbour_occupancy >= 0 && unknown_neighbour_occupancy <= 1)) {
     throw std::invalid_argument(
         "VisibilityStereoConfig.unknown_neighbour_occupancy must be in [0, 1]");
+  }
+  if (!(passed_sigmas >= 0) || !std::isfinite(passed_sigmas)) {
+    throw std::invalid_argument("VisibilityStereoConfig.passed_sigmas must be >= 0");
+  }
+  if (!(passed_miss_probability > 0 && passed_miss_probability < 0.5)) {
+    throw std::invalid_argument(
+        "VisibilityStereoConfig.passed_miss_probability must be in (0, 0.5)");
   }
   if (!(inside_stop_probability > 0.5 && inside_stop_probability < 1)) {
     throw std::invalid_argument(

@@ -183,12 +183,14 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
   }
   // Reduction to one update per voxel: the largest P(I_v) (a hit wins over a
   // miss, as in OctoMap) and the largest visibility (see reduce()).
-  void reduce(std::uint32_t entry, float p_inside, float visibility) {
-    reduceInto(&entries_[entry], p_inside, visibility);
+  void reduce(std::uint32_t entry, float p_inside, float visibility, bool passed = false) {
+    reduceInto(&entries_[entry], p_inside, visibility, passed);
   }
-  static void reduceInto(StereoVoxelUpdate* update, float p_inside, float visibility) {
+  static void reduceInto(StereoVoxelUpdate* update, float p_inside, float visibility,
+                         bool passed = false) {
     update->p_inside = std::max(update->p_inside, p_inside);
     update->visibility = std::max(update->visibility, visibility);
+    update->passed = update->passed || passed;
   }
   void merge(const FrameUpdates& other, const VoxelIndex& origin) {
     for (std::size_t i = 0; i < other.entries_.size(); ++i) {
@@ -199,7 +201,7 @@ class alignas(64) FrameUpdates {  // per thread, side by side: no shared cache l
         entries_[entry].prior = theirs.prior;
         readings_[entry].inside_cap = other.readings_[i].inside_cap;
       }
-      reduce(entry, theirs.p_inside, theirs.visibility);
+      reduce(entry, theirs.p_inside, theirs.visibility, theirs.passed);
     }
   }
   std::vector<StereoVoxelUpdate>& entries() { return entries_; }
@@ -583,6 +585,13 @@ class RayCaster {
       zero_before_ = range_ - (NormalCdfTable::kRange + 1e-3) * range_sigma_ - 1e-9 * range_;
     }
     bool open() const { return open_; }
+    // Whether a voxel (its centre, its half diagonal) lies wholly more than `sigmas` range sigmas
+    // in front of the point.
+    bool clearlyBefore(const Eigen::Vector3d& centre_from_origin, double half_diagonal,
+                       double sigmas) const {
+      return open_ &&
+             centre_from_origin.dot(direction_) + half_diagonal < range_ - sigmas * range_sigma_;
+    }
     double farthestReach() const { return open_ ? range_ + 6.0 * range_sigma_ : 0.0; }  // m
     double next(const Eigen::Vector3d& centre_from_origin, const NormalCdfTable& phi) {
       if (!open_) return 0.0;
@@ -612,17 +621,23 @@ class RayCaster {
     const double reach = std::max(far.farthestReach(), near.farthestReach());
     const std::size_t max_steps = static_cast<std::size_t>(3 * reach / f.resolution + 8);
     double visibility = 1.0;
+    const double half_diagonal = 0.5 * std::sqrt(3.0) * f.resolution;
     for (std::size_t j = 0; j < max_steps; ++j) {
       const CachedVoxel& voxel = lookUp(ray.current(), j, true);
-      visibility = visibilityAfter(visibility, voxel.occlusion, f.config);  // Eq. 3
+      const Eigen::Vector3d centre = centreFromOrigin(voxel.index);
+      // clear_passed: the frame saw through a voxel well in front of the nearer point.
+      const bool passed =
+          f.config.clear_passed &&
+          (near.open() ? near : far).clearlyBefore(centre, half_diagonal, f.config.passed_sigmas);
+      if (!passed) visibility = visibilityAfter(visibility, voxel.occlusion, f.config);  // Eq. 3
       visibility = limitByMeasurement(visibility, voxel);
       if (visibility < f.config.visibility_min) {
         ++counters_.rays_invisible;
         return;
       }
-      const Eigen::Vector3d centre = centreFromOrigin(voxel.index);
       const double p_inside = std::max(far.next(centre, f.phi), near.next(centre, f.phi));
-      updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility));
+      updates_->reduce(voxel.entry, static_cast<float>(p_inside), static_cast<float>(visibility),
+                       passed);
       if (!far.open() && !near.open()) return;
       ray.next();
     }
@@ -647,7 +662,8 @@ class UpdateWriter {
         min_log_odds_(map.minLogOdds()),
         max_log_odds_(map.maxLogOdds()),
         hit_(map.model().hitLogOdds()),
-        miss_(map.model().missLogOdds()) {}
+        miss_(map.model().missLogOdds()),
+        passed_miss_(static_cast<float>(logit(config.passed_miss_probability))) {}
 
   void write(const StereoVoxelUpdate& update, int linear, VoxelBlock* block) const {
     if (octomap_) {
@@ -655,6 +671,10 @@ class UpdateWriter {
       return;
     }
     const float old_value = block->log_odds[linear];
+    if (config_.clear_passed && update.passed && update.p_inside < 0.01f) {
+      block->update(linear, passed_miss_, min_log_odds_, max_log_odds_);
+      return;
+    }
     const double p_unknown = update.prior >= 0 ? update.prior : config_.unknown_occupancy;
     const double p_old =
         VoxelBlock::isKnown(old_value) ? probabilityFromLogOdds(old_value) : p_unknown;
@@ -667,7 +687,7 @@ class UpdateWriter {
  private:
   const VisibilityStereoConfig& config_;
   bool octomap_;
-  float min_log_odds_, max_log_odds_, hit_, miss_;
+  float min_log_odds_, max_log_odds_, hit_, miss_, passed_miss_;
 };
 
 // The threads' updates written to the map block by block, each block on one thread, without
@@ -719,7 +739,7 @@ std::size_t writeThreadUpdates(const std::vector<FrameUpdates>& threads, const V
           found = true;
           continue;
         }
-        FrameUpdates::reduceInto(&update, theirs.p_inside, theirs.visibility);
+        FrameUpdates::reduceInto(&update, theirs.p_inside, theirs.visibility, theirs.passed);
       }
       // A voxel looked up where the visibility fell below q_min was entered but never updated.
       if (!found || !(update.visibility > 0)) continue;

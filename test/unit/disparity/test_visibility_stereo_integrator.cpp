@@ -144,6 +144,65 @@ TEST(VisibilityStereoIntegratorTest, FreeMapEverythingVisible) {
   EXPECT_NEAR(probabilityAt(map, 16), 0.3, 1e-6);
 }
 
+// clear_passed: the point lies 0.5 m behind the wall (voxels 10, 11) with a tiny sigma, so the
+// ray passed the wall clearly: the wall no longer hides what is behind it, and every voxel the
+// ray passed takes the passed miss, logit(0.3) (the frame saw through the place something left):
+// the wall's max + logit(0.3), the free ones 2 logit(0.3), P = 0.09 / 0.58; the point's voxel
+// its hit. Five such frames bring a clamped voxel to free.
+TEST(VisibilityStereoIntegratorTest, ClearPassedSeesThroughWhatHasLeft) {
+  VisibilityStereoConfig config = kTableI;
+  config.clear_passed = true;
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(true, &map);
+  integrateOnePoint(config, &map);
+  const float passed = static_cast<float>(logit(config.passed_miss_probability));
+  for (int k : {10, 11}) {
+    EXPECT_NEAR(*map.logOdds(VoxelIndex(k, 0, 0)), map.maxLogOdds() + passed, 1e-5) << k;
+  }
+  for (int k = 0; k <= 13; ++k) {
+    if (k == 10 || k == 11) continue;
+    EXPECT_NEAR(probabilityAt(map, k), 0.09 / 0.58, 1e-6) << k;
+  }
+  // Voxel 14 reaches past 1.52 m (its centre 1.45 m plus half a diagonal): Eq. 4-8's visible
+  // miss; voxel 15 the hit, as before.
+  EXPECT_NEAR(probabilityAt(map, 14), 0.135 / 0.534, 1e-6);
+  EXPECT_NEAR(probabilityAt(map, 15), 0.165 / 0.466, 1e-6);
+  for (int frame = 1; frame < 5; ++frame) integrateOnePoint(config, &map);
+  EXPECT_EQ(map.occupancy(VoxelIndex(10, 0, 0)), Occupancy::kFree);
+  EXPECT_EQ(map.occupancy(VoxelIndex(11, 0, 0)), Occupancy::kFree);
+}
+
+// A voxel within passed_sigmas of the point is not passed (the measurement's own uncertainty),
+// nor is one that another ray of the frame ends in: a surface seen at a grazing angle stays.
+TEST(VisibilityStereoIntegratorTest, ClearPassedKeepsWhatTheFrameStillMeasures) {
+  VisibilityStereoConfig config = kTableI;
+  config.clear_passed = true;
+  {
+    VoxelMap map(mapConfig());
+    fillFreeCorridor(true, &map);
+    // The point 0.5 m behind the wall's front but with sigma 0.2 m: the wall lies within 3 sigma.
+    VisibilityStereoIntegrator(config).integrate({kPoint}, {0.2f}, kOrigin, &map);
+    VoxelMap plain(mapConfig());
+    fillFreeCorridor(true, &plain);
+    VisibilityStereoIntegrator(kTableI).integrate({kPoint}, {0.2f}, kOrigin, &plain);
+    // The wall (its far side 1.29 m out, past 1.52 - 3 * 0.2 m) and what lies behind it: as
+    // without clear_passed; voxels up to 0.92 m out were passed.
+    for (int k = 9; k <= 17; ++k) {
+      EXPECT_EQ(map.logOdds(VoxelIndex(k, 0, 0)), plain.logOdds(VoxelIndex(k, 0, 0))) << k;
+    }
+    EXPECT_NEAR(probabilityAt(map, 5), 0.09 / 0.58, 1e-6);
+  }
+  VoxelMap map(mapConfig());
+  fillFreeCorridor(true, &map);
+  // A second ray ends in voxel 10: it is hit, not cleared.
+  VisibilityStereoIntegrator(perRay(config))
+      .integrate({kPoint, Eigen::Vector3f(1.04f, 0.05f, 0.05f)}, {kTinySigma, kTinySigma}, kOrigin,
+                 &map);
+  EXPECT_GT(*map.logOdds(VoxelIndex(10, 0, 0)), map.maxLogOdds() - 0.01f);
+  EXPECT_NEAR(*map.logOdds(VoxelIndex(11, 0, 0)),
+              map.maxLogOdds() + static_cast<float>(logit(config.passed_miss_probability)), 1e-5);
+}
+
 TEST(VisibilityStereoIntegratorTest, KnownWallHidesTheVoxelsBehindIt) {
   VoxelMap map(mapConfig());
   fillFreeCorridor(true, &map);

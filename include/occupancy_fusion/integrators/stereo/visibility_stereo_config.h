@@ -94,6 +94,15 @@ struct VisibilityStereoConfig {
   // front): the space behind the frame's surface is invisible however Eq. 1's minimum reads the
   // neighbours (a ray grazing a surface always finds one in front of it).
   bool measured_visibility = true;
+  // Beyond the paper, for what has left the view: a voxel that a ray passes clearly in front of
+  // its measured point (its far side more than passed_sigmas range sigmas of Eq. 7 before the
+  // point) does not occlude the rest of that ray, and, where no ray of the frame ends near it
+  // (P(I_v) below 0.01 on all of them), takes a miss of passed_miss_probability instead of Eq.
+  // 4-8's: the frame saw through it to a surface behind it. A matcher's correlated error ends its
+  // rays in the error, not behind it.
+  bool clear_passed = false;
+  double passed_sigmas = 3.0;
+  double passed_miss_probability = 0.3;
   // Eq. 8: the ray stops at the first voxel whose P(I_v) reaches this value
   // ("close to 1"); that voxel gets a full hit, P(O_v | H).
   double inside_stop_probability = 0.99;
@@ -148,7 +157,8 @@ enum class StereoParameterSet {
   // Beyond the paper, the default of the mappers: Table I with unknown_neighbours kMeasured, the
   // visibility of never-observed space from the frame's own measured surface, so that a moving
   // camera's new view is mapped from its first frames while the correlated matcher errors stay
-  // rejected (docs/disparity_method.md, "Moving camera").
+  // rejected (docs/disparity_method.md, "Moving camera"), and clear_passed, so that what has left
+  // the view is cleared within a few frames (docs/dynamic_scenes.md).
   kMeasured,
 };
 std::string toString(StereoParameterSet set);

@@ -66,6 +66,8 @@ struct StereoVoxelUpdate {
   float p_inside = 0.0f;    // max over the frame's rays of P(I_v) (kOctomap: 1 hit, 0 miss)
   float visibility = 0.0f;  // max over the frame's rays of P(V_v) (kOctomap: 1)
   float prior = -1.0f;      // P(O) of Eq. 4-6 if the voxel is unknown; negative: unknown_occupancy
+  // clear_passed: a ray of the frame passed the voxel clearly in front of its measured point
+  bool passed = false;
 };
 
 struct StereoIntegrationStats {
