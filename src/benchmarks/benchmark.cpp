@@ -377,7 +377,7 @@ const std::vector<Workload>& workloads() {
         "measured_fuse_known",
         "measured_prior",
         "measured_inside",
-        "measured_visibility", "clear_passed",
+        "measured_visibility", "clear_passed", "passed_sigmas",
         "noise_px",
         "patch_probability",
         "patch_px",

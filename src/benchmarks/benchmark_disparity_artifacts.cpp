@@ -281,6 +281,7 @@ VisibilityStereoConfig configFrom(const CommandLine& args, bool lists,
       args.intValue("measured_grid_max_px", config.measured_surface.grid_max_step_px);
   config.measured_sigma_max_voxels =
       args.doubleValue("measured_sigma_max_voxels", config.measured_sigma_max_voxels);
+  config.passed_sigmas = args.doubleValue("passed_sigmas", config.passed_sigmas);
   for (const auto& [option, field] :
        {std::pair<const char*, bool*>{"measured_fuse_known", &config.measured_fuse_known},
         {"measured_prior", &config.measured_prior},
