@@ -9,26 +9,10 @@
 
 #include "occupancy_fusion/eval/dynamic_scenes.h"
 #include "occupancy_fusion/tools/command_line.h"
-#include "occupancy_fusion/tools/yaml_parameter_source.h"
+#include "shipped_config.h"
 
 namespace occupancy_fusion {
 namespace {
-
-// The shipped configs, as mapping.launch loads them (or the given ones).
-MappingSessionConfig mappingConfig(const CommandLine& args) {
-  std::vector<std::string> files = args.values("config");
-  if (files.empty()) {
-    for (const char* name :
-         {"depth_mapper", "laser_mapper", "disparity_mapper", "point_cloud_mapper", "map_server"}) {
-      files.push_back(std::string(OCCUPANCY_FUSION_SOURCE_DIR) + "/config/" + name + ".yaml");
-    }
-  }
-  try {
-    return readMappingSessionConfig(YamlParameterSource::fromFiles(files, ""));
-  } catch (const std::exception& error) {
-    throw UsageError(std::string("--config: ") + error.what());
-  }
-}
 
 std::vector<double> numbers(const CommandLine& args, const std::string& name,
                             const std::string& fallback) {
@@ -53,7 +37,7 @@ std::size_t ghostAfter(const DynamicSceneResult& result, std::size_t n) {
 
 int runDynamic(const CommandLine& args) {
   DynamicSceneCase base;
-  base.mapping = mappingConfig(args);
+  base.mapping = shippedOrGivenMappingConfig(args);
   base.frames_before = args.intValue("frames_before", base.frames_before);
   base.frames_after = args.intValue("frames_after", base.frames_after);
   base.disparity_noise_px = args.doubleValue("noise_px", base.disparity_noise_px);

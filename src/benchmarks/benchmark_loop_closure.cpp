@@ -14,30 +14,14 @@
 #include "occupancy_fusion/eval/loop_closure.h"
 #include "occupancy_fusion/map/map_files.h"
 #include "occupancy_fusion/tools/command_line.h"
-#include "occupancy_fusion/tools/yaml_parameter_source.h"
+#include "shipped_config.h"
 
 namespace occupancy_fusion {
 namespace {
 
-// The mappers' settings: the given config files, else the shipped ones (as mapping.launch loads
-// them), with the fused band of map_server.yaml.
-MappingSessionConfig mappingConfig(const CommandLine& args) {
-  std::vector<std::string> files = args.values("config");
-  if (files.empty()) {
-    for (const char* name : {"depth_mapper", "laser_mapper", "disparity_mapper", "map_server"}) {
-      files.push_back(std::string(OCCUPANCY_FUSION_SOURCE_DIR) + "/config/" + name + ".yaml");
-    }
-  }
-  try {
-    return readMappingSessionConfig(YamlParameterSource::fromFiles(files, ""));
-  } catch (const std::exception& error) {
-    throw UsageError(std::string("--config: ") + error.what());
-  }
-}
-
 LoopClosureCase caseFrom(const CommandLine& args) {
   LoopClosureCase setup;
-  setup.mapping = mappingConfig(args);
+  setup.mapping = shippedOrGivenMappingConfig(args);
   setup.resolution = args.doubleValue("resolution", setup.resolution);
   setup.step = args.doubleValue("step", setup.step);
   setup.laps = args.doubleValue("laps", setup.laps);

@@ -7,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "occupancy_fusion/eval/simulated_frames.h"
 #include "occupancy_fusion/map/spatial_key.h"
 #include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/sim/depth_camera.h"
@@ -157,16 +158,8 @@ void mapFrame(const DynamicSceneCase& setup, const sim::Scene& scene, int k, dou
       noise.sigma_px = setup.disparity_noise_px;
       const sim::DisparityImage image =
           sim::renderDisparity(scene, kCamera, kBaseline, cameraPose(x), kMaxRange, noise, k);
-      DisparityFrame frame;
-      frame.header = headerFor("disparity", stamp, cameraPose(x));
-      frame.camera.fx = frame.camera.fy = kCamera.fx;
-      frame.camera.cx = kCamera.cx;
-      frame.camera.cy = kCamera.cy;
-      frame.camera.baseline = kBaseline;
-      frame.width = image.width;
-      frame.height = image.height;
-      frame.disparity = image.disparity;
-      session->integrate(frame);
+      session->integrate(disparityFrameOf(image, kCamera, kBaseline,
+                                          headerFor("disparity", stamp, cameraPose(x))));
       return;
     }
   }

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "occupancy_fusion/eval/simulated_frames.h"
 #include "occupancy_fusion/mapping/mapping_session.h"
 #include "occupancy_fusion/sensors/carmen_log.h"
 #include "occupancy_fusion/sim/depth_camera.h"
@@ -150,16 +151,8 @@ std::vector<StepFrames> renderFrames(const sim::Scene& scene, const Drive& drive
       const sim::DisparityImage image =
           sim::renderDisparity(scene, kCamera, kBaseline, T_map_base * stereoMount().T_base_sensor,
                                kSensorMaxRange, noise, k);
-      DisparityFrame frame;
-      frame.header = headerFor("disparity", stereoMount(), drive.stamp(k));
-      frame.camera.fx = frame.camera.fy = kCamera.fx;
-      frame.camera.cx = kCamera.cx;
-      frame.camera.cy = kCamera.cy;
-      frame.camera.baseline = kBaseline;
-      frame.width = image.width;
-      frame.height = image.height;
-      frame.disparity = image.disparity;
-      step.disparity = std::move(frame);
+      step.disparity = disparityFrameOf(image, kCamera, kBaseline,
+                                        headerFor("disparity", stereoMount(), drive.stamp(k)));
     }
   }
   return result;

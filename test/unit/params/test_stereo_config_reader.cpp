@@ -195,6 +195,9 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
                                           "measured_grid_fraction",
                                           "measured_grid_max_px",
                                           "inside_stop_probability",
+                                          "clear_passed",
+                                          "passed_sigmas",
+                                          "passed_miss_probability",
                                           "max_range",
                                           "bundle_rays",
                                           "disparity_sigma_px",
@@ -209,7 +212,8 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
     EXPECT_NE(std::find(known.begin(), known.end(), name), known.end()) << key;
   }
   // The keys the sets change are commented out in the file, so the set takes effect.
-  EXPECT_EQ(stereo_keys, known.size() - 3);
+  EXPECT_EQ(stereo_keys, known.size() - 4);
+  EXPECT_EQ(values.count("stereo/clear_passed"), 0u);
   EXPECT_EQ(values.count("stereo/visibility_min"), 0u);
   EXPECT_EQ(values.count("stereo/prob_hit_invisible"), 0u);
   EXPECT_EQ(values.count("stereo/unknown_neighbours"), 0u);
@@ -217,6 +221,10 @@ TEST(StereoConfigReader, ShippedConfigFileHoldsTableIWithTheMeasuredSet) {
   const VisibilityStereoConfig from_file = readFrom(values);
   const VisibilityStereoConfig defaults;  // Table I
   EXPECT_EQ(from_file.unknown_neighbours, UnknownNeighbours::kMeasured);
+  EXPECT_TRUE(from_file.clear_passed);
+  EXPECT_FALSE(defaults.clear_passed);
+  EXPECT_DOUBLE_EQ(from_file.passed_sigmas, defaults.passed_sigmas);
+  EXPECT_DOUBLE_EQ(from_file.passed_miss_probability, defaults.passed_miss_probability);
   EXPECT_EQ(from_file.measured_surface.window_px, MeasuredSurfaceConfig().window_px);
   EXPECT_DOUBLE_EQ(from_file.measured_surface.grid_footprint_fraction,
                    MeasuredSurfaceConfig().grid_footprint_fraction);
