@@ -180,18 +180,22 @@ class ObjectRegion {
     }
   }
 
-  std::size_t count(const MappingSession& session) const {
+  // Those the sensor sees now (in_view of their centre): what leaves the view cannot be cleared.
+  template <class InView>
+  std::size_t count(const MappingSession& session, InView in_view) const {
     std::size_t count = 0;
     if (planar_) {
       session.laserLayer().forEachKnownCell([&](const CellIndex& cell, float value) {
         if (session.laserLayer().classify(value) != Occupancy::kOccupied) return;
         const Eigen::Vector2d centre = session.laserLayer().centerOf(cell);
-        count += left(Eigen::Vector3d(centre.x(), centre.y(), 0.3)) ? 1 : 0;
+        const Eigen::Vector3d point(centre.x(), centre.y(), 0.3);
+        count += in_view(point) && left(point) ? 1 : 0;
       });
       return count;
     }
     session.map().forEachOccupiedVoxel([&](const VoxelIndex& voxel, float) {
-      count += left((voxel.cast<double>().array() + 0.5).matrix() * resolution_) ? 1 : 0;
+      const Eigen::Vector3d centre = (voxel.cast<double>().array() + 0.5).matrix() * resolution_;
+      count += in_view(centre) && left(centre) ? 1 : 0;
     });
     return count;
   }
@@ -327,7 +331,18 @@ DynamicSceneResult evaluateDynamicScene(const DynamicSceneCase& setup) {
     const auto start = std::chrono::steady_clock::now();
     mapFrame(setup, scene, k, x, &session);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const std::size_t left = region.count(session);
+    const auto in_view = [&](const Eigen::Vector3d& point) {
+      if (isLaser(setup.mapper)) {
+        const Eigen::Vector3d local = laserPose(x).inverse() * point;
+        return local.x() > 0.0 && local.head<2>().norm() < sim::LaserScanner().range_max;
+      }
+      const Eigen::Vector3d local = cameraPose(x).inverse() * point;
+      if (!(local.z() > 0.1 && local.z() < kMaxRange)) return false;
+      const double u = kCamera.fx * local.x() / local.z() + kCamera.cx;
+      const double v = kCamera.fy * local.y() / local.z() + kCamera.cy;
+      return u >= 0.0 && u < kCamera.width && v >= 0.0 && v < kCamera.height;
+    };
+    const std::size_t left = region.count(session, in_view);
     if (k < result.change_frame) {
       result.object_voxels = std::max(result.object_voxels, left);
     } else {
