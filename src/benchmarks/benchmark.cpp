@@ -437,13 +437,14 @@ const std::vector<Workload>& workloads() {
         "config", "carmen", "path_every", "max_scans", "stretch_x", "stretch_y"},
        runLoopClosure},
       {"dynamic",
-       "[--events removed_box,person,door] [--mappers depth,stereo,stereo_table_i,\n"
+       "[--events removed_box,person,door,chair] [--mappers depth,stereo,stereo_table_i,\n"
        "      stereo_octomap,point_cloud,laser] [--resolution 0.05,0.1] [--speed 0,0.5]\n"
        "      [--frames_before N] [--frames_after N] [--noise_px P] [--curves CSV] [--config FILE "
        "...]\n"
        "      an object leaves a sensor's view in the simulated corridor (a box taken away, a "
        "person\n"
-       "      walking across at 1 m/s, a door opening), the sensor standing or moving along it: "
+       "      walking across at 1 m/s, a door opening, a chair moved), the sensor standing or "
+       "moving: "
        "the\n"
        "      ghost voxels (laser cells) it leaves after 1, 3, 5 frames and the frames until "
        "fewer\n"

@@ -44,7 +44,7 @@ int runDynamic(const CommandLine& args) {
   std::vector<DynamicEvent> events;
   std::vector<DynamicMapper> mappers;
   try {
-    for (const std::string& name : args.listValue("events", "removed_box,person,door")) {
+    for (const std::string& name : args.listValue("events", "removed_box,person,door,chair")) {
       events.push_back(dynamicEventFromString(name));
     }
     for (const std::string& name : args.listValue(

@@ -55,6 +55,11 @@ class ObjectMotion {
   double sensorStart() const { return setup_.event == DynamicEvent::kPerson ? 13.0 : 1.0; }
 
   std::optional<Eigen::AlignedBox3d> at(int k) const {
+    // The chair: moved across the corridor at the change and left there.
+    if (setup_.event == DynamicEvent::kChair) {
+      return k < changeFrame() ? box(3.6, -0.9, 0.0, 4.1, -0.4, 0.9)
+                               : box(3.6, 0.4, 0.0, 4.1, 0.9, 0.9);
+    }
     if (k >= changeFrame()) return std::nullopt;
     switch (setup_.event) {
       case DynamicEvent::kRemovedBox:
@@ -65,6 +70,8 @@ class ObjectMotion {
       }
       case DynamicEvent::kDoor:
         return box(7.0, 1.2, 0.0, 8.0, 1.4, 2.0);
+      case DynamicEvent::kChair:
+        break;
     }
     return std::nullopt;
   }
@@ -259,6 +266,8 @@ std::string toString(DynamicEvent event) {
       return "person";
     case DynamicEvent::kDoor:
       return "door";
+    case DynamicEvent::kChair:
+      return "chair";
   }
   return "?";
 }
@@ -282,11 +291,11 @@ std::string toString(DynamicMapper mapper) {
 }
 
 DynamicEvent dynamicEventFromString(const std::string& name) {
-  for (DynamicEvent event :
-       {DynamicEvent::kRemovedBox, DynamicEvent::kPerson, DynamicEvent::kDoor}) {
+  for (DynamicEvent event : {DynamicEvent::kRemovedBox, DynamicEvent::kPerson, DynamicEvent::kDoor,
+                             DynamicEvent::kChair}) {
     if (toString(event) == name) return event;
   }
-  throw std::invalid_argument("unknown event '" + name + "' (removed_box, person, door)");
+  throw std::invalid_argument("unknown event '" + name + "' (removed_box, person, door, chair)");
 }
 
 DynamicMapper dynamicMapperFromString(const std::string& name) {

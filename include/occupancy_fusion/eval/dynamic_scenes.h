@@ -6,7 +6,9 @@
 //  - person: a person-sized box 0.4 x 0.3 x 1.7 m walks across the corridor at 1 m/s, 4 m ahead
 //    of the sensor's start (x = 13 m, in front of the end wall), and is gone at the far wall;
 //  - door: a panel 1.0 x 0.2 x 2.0 m closes the doorway at x in [7, 8] for 15 frames, then opens
-//    (is gone), 6 m ahead of the sensor's start (x = 1 m).
+//    (is gone), 6 m ahead of the sensor's start (x = 1 m);
+//  - chair: a box 0.5 x 0.5 x 0.9 m stands 2.6-3.1 m ahead, left of the axis, for 15 frames and
+//    is moved 0.8 m across to the right and left there.
 // The frames are rendered from the true poses and mapped by one mapper of the package (depth
 // images, the stereo default or Table I, OctoMap's update on the same disparities, point clouds
 // of the depth images, or a 2D laser into the laser layer). After each frame: ghost voxels
@@ -24,7 +26,7 @@
 
 namespace occupancy_fusion {
 
-enum class DynamicEvent { kRemovedBox, kPerson, kDoor };
+enum class DynamicEvent { kRemovedBox, kPerson, kDoor, kChair };
 enum class DynamicMapper {
   kDepth,
   kStereoDefault,
