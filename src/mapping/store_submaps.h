@@ -31,13 +31,27 @@
 
 namespace occupancy_fusion {
 
-// The VoxelMap's blocks: changes kept sparse by bricks where few are touched.
-struct VoxelStoreTraits {
-  using Store = VoxelMap;
-  using Cells = VoxelBlock;
+// What both stores keep of a block's (tile's) changes, and how.
+template <class StoreType, class CellsType, int kCount>
+struct PackedChangesTraits {
+  using Store = StoreType;
+  using Cells = CellsType;
+  static constexpr int kCellCount = kCount;
+  using Stored = PackedLogOddsChanges<kCount>;
+
+  static Stored store(const Store& store, const Cells& before, const Cells& after) {
+    return Stored(before, after, store.thresholdLogOdds());
+  }
+  static const Cells& view(const Stored& stored, Cells* scratch) {
+    stored.expandInto(scratch);
+    return *scratch;
+  }
+  static std::size_t bytes(const Stored& stored) { return stored.bytes(); }
+};
+
+// The VoxelMap's blocks.
+struct VoxelStoreTraits : PackedChangesTraits<VoxelMap, VoxelBlock, VoxelBlock::kVolume> {
   using Index = Eigen::Vector3i;
-  static constexpr int kCellCount = VoxelBlock::kVolume;
-  using Stored = PackedLogOddsChanges<kCellCount>;
 
   static std::uint64_t key(const Index& index) { return packKey(index); }
   static Index unkey(std::uint64_t key) { return unpackKey3(key); }
@@ -52,15 +66,6 @@ struct VoxelStoreTraits {
     return scaled.array().floor().cast<int>();
   }
   static int side() { return VoxelBlock::kSide; }
-
-  static Stored store(const Store& store, const Cells& before, const Cells& after) {
-    return Stored(before, after, store.thresholdLogOdds());
-  }
-  static const Cells& view(const Stored& stored, Cells* scratch) {
-    stored.expandInto(scratch);
-    return *scratch;
-  }
-  static std::size_t bytes(const Stored& stored) { return stored.bytes(); }
 
   static void setWriteWatcher(Store* store, CellsWriteWatcher<Index, Cells>* watcher,
                               const std::function<void(const VoxelMap::BlockReader&)>& on_switch) {
@@ -77,12 +82,8 @@ struct VoxelStoreTraits {
 };
 
 // The laser layer's tiles, in the map's x-y plane: a placement's planar part moves them.
-struct TileStoreTraits {
-  using Store = GridLayer2D;
-  using Cells = GridTile;
+struct TileStoreTraits : PackedChangesTraits<GridLayer2D, GridTile, GridTile::kArea> {
   using Index = Eigen::Vector2i;
-  static constexpr int kCellCount = GridTile::kArea;
-  using Stored = PackedLogOddsChanges<kCellCount>;
 
   static std::uint64_t key(const Index& index) { return packKey(index); }
   static Index unkey(std::uint64_t key) { return unpackKey2(key); }
@@ -96,15 +97,6 @@ struct TileStoreTraits {
     return scaled.head<2>().array().floor().cast<int>();
   }
   static int side() { return GridTile::kSide; }
-
-  static Stored store(const Store& store, const Cells& before, const Cells& after) {
-    return Stored(before, after, store.thresholdLogOdds());
-  }
-  static const Cells& view(const Stored& stored, Cells* scratch) {
-    stored.expandInto(scratch);
-    return *scratch;
-  }
-  static std::size_t bytes(const Stored& stored) { return stored.bytes(); }
 
   static void setWriteWatcher(
       Store* store, CellsWriteWatcher<Index, Cells>* watcher,

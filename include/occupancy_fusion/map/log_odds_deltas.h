@@ -163,21 +163,18 @@ class PackedLogOddsChanges {
     std::array<std::int16_t, kCount> values;
   };
   static constexpr int kMaskBytes = kWords * 8;
+  static_assert(offsetof(Raw, values) == kMaskBytes, "Raw's values follow its mask");
   int rawSize() const { return kMaskBytes + static_cast<int>(count_ * sizeof(std::int16_t)); }
 
-  // The mask and the first count_ values, in one buffer, compressed.
+  // The mask and the first count_ values, compressed straight from Raw, where they lie
+  // contiguously (checked below).
   void pack(const Raw& raw) {
-    std::vector<char> bytes(static_cast<std::size_t>(rawSize()));
-    std::memcpy(bytes.data(), raw.mask.data(), kMaskBytes);
-    std::memcpy(bytes.data() + kMaskBytes, raw.values.data(), count_ * sizeof(std::int16_t));
-    packed_ = detail::compressChanges(bytes.data(), rawSize(), &packed_size_);
+    packed_ =
+        detail::compressChanges(reinterpret_cast<const char*>(&raw), rawSize(), &packed_size_);
   }
   void unpack(Raw* raw) const {
     if (!packed_) return;  // empty: no cell changed
-    std::array<char, sizeof(Raw)> bytes;
-    detail::expandChanges(packed_.get(), packed_size_, bytes.data(), rawSize());
-    std::memcpy(raw->mask.data(), bytes.data(), kMaskBytes);
-    std::memcpy(raw->values.data(), bytes.data() + kMaskBytes, count_ * sizeof(std::int16_t));
+    detail::expandChanges(packed_.get(), packed_size_, reinterpret_cast<char*>(raw), rawSize());
   }
 
   std::uint32_t count_ = 0;
