@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bitset>
 #include <chrono>
 #include <cmath>
@@ -128,6 +129,13 @@ std::vector<BlockIndex> VoxelUpdateSet::blocks() const {
 void PointCloudIntegratorConfig::validate() const {
   if (std::isnan(max_range)) {
     throw std::invalid_argument("PointCloudIntegratorConfig.max_range must not be NaN");
+  }
+  if (!(passed_miss_probability > 0.0 && passed_miss_probability < 0.5)) {
+    throw std::invalid_argument(
+        "PointCloudIntegratorConfig.passed_miss_probability must lie in (0, 0.5)");
+  }
+  if (passed_margin < 0 || passed_margin > 8) {
+    throw std::invalid_argument("PointCloudIntegratorConfig.passed_margin must lie in [0, 8]");
   }
 }
 
@@ -272,6 +280,57 @@ void PointCloudIntegrator::apply(const VoxelUpdateSet& update, float hit_log_odd
   });
 }
 
+namespace {
+
+// Whether a voxel of the update within `margin` voxels of `voxel` (on each axis) is an end voxel.
+bool nearEndVoxel(const VoxelUpdateSet& update, const VoxelIndex& voxel, int margin) {
+  for (int dz = -margin; dz <= margin; ++dz) {
+    for (int dy = -margin; dy <= margin; ++dy) {
+      for (int dx = -margin; dx <= margin; ++dx) {
+        if (update.isOccupied(voxel + VoxelIndex(dx, dy, dz))) return true;
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+std::size_t PointCloudIntegrator::applyClearingPassed(const VoxelUpdateSet& update,
+                                                      VoxelMap* map) const {
+  const OccupancyModel& model = map->model();
+  const float hit = model.hitLogOdds();
+  const float miss = model.missLogOdds();
+  const float passed_miss = static_cast<float>(
+      std::log(config_.passed_miss_probability / (1.0 - config_.passed_miss_probability)));
+  const float threshold = model.thresholdLogOdds();
+  const float min_log_odds = map->minLogOdds();
+  const float max_log_odds = map->maxLogOdds();
+  std::atomic<std::size_t> passed{0};
+  map->updateBlocks(update.blocks(), [&](const BlockIndex& block_index, VoxelBlock& block) {
+    const VoxelUpdateSet::BlockMasks* masks = update.find(block_index);
+    std::size_t passed_here = 0;
+    for (int w = 0; w < VoxelUpdateSet::kWords; ++w) {
+      const std::uint64_t occupied = masks->occupied[w];
+      for (std::uint64_t bits = occupied; bits != 0; bits &= bits - 1) {
+        block.update(64 * w + __builtin_ctzll(bits), hit, min_log_odds, max_log_odds);
+      }
+      for (std::uint64_t bits = masks->free[w] & ~occupied; bits != 0; bits &= bits - 1) {
+        const int linear = 64 * w + __builtin_ctzll(bits);
+        // Occupied now, passed by a ray, and no ray ends near it: it has left.
+        const bool cleared =
+            block.log_odds[linear] > threshold &&
+            !nearEndVoxel(update, block_index * VoxelBlock::kSide + VoxelBlock::localIndex(linear),
+                          config_.passed_margin);
+        passed_here += cleared ? 1 : 0;
+        block.update(linear, cleared ? passed_miss : miss, min_log_odds, max_log_odds);
+      }
+    }
+    passed += passed_here;
+  });
+  return passed;
+}
+
 IntegrationStats PointCloudIntegrator::integrate(const std::vector<Eigen::Vector3f>& points_in_map,
                                                  const Eigen::Vector3d& sensor_origin_in_map,
                                                  VoxelMap* map) const {
@@ -281,7 +340,11 @@ IntegrationStats PointCloudIntegrator::integrate(const std::vector<Eigen::Vector
       computeUpdate(points_in_map, sensor_origin_in_map, map->resolution(), &update);
   if (stats.rays > 0) {
     map->setFocus(sensor_origin_in_map);
-    apply(update, map->model().hitLogOdds(), map->model().missLogOdds(), map);
+    if (config_.clear_passed) {
+      stats.passed_voxels = applyClearingPassed(update, map);
+    } else {
+      apply(update, map->model().hitLogOdds(), map->model().missLogOdds(), map);
+    }
   }
   stats.free_voxels = update.freeCount();
   stats.occupied_voxels = update.occupiedCount();

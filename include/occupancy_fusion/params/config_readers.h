@@ -43,11 +43,15 @@ MapperNodeletConfig readMapperNodeletConfig(const ParameterSource& source);
 // Readers of integrator configs are defined inline: the map library, which holds the readers
 // above, must not depend on the integrators library (it links the other way round).
 
-// sensor_model/max_range (m, negative = unlimited), discretize.
+// sensor_model/max_range (m, negative = unlimited), discretize, clear_passed,
+// passed_miss_probability, passed_margin.
 inline PointCloudIntegratorConfig readPointCloudIntegratorConfig(const ParameterSource& source) {
   PointCloudIntegratorConfig config;
   source.get("sensor_model/max_range", &config.max_range);
   source.get("discretize", &config.discretize);
+  source.get("clear_passed", &config.clear_passed);
+  source.get("passed_miss_probability", &config.passed_miss_probability);
+  source.get("passed_margin", &config.passed_margin);
   config.validate();
   return config;
 }

@@ -2,6 +2,7 @@
 // loop; publishes TF (map -> odom -> base_link -> sensor frames) and the data of its simulated
 // sensors, stamped with the current time. On the loop its odometry may drift, and a graph-SLAM
 // stand-in then publishes map -> odom and its keyframe path, correcting both at loop closures.
+// An obstacle box may be put into the scene and taken away (~set_obstacle) while the sensors look.
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -63,6 +64,19 @@ struct CirclePath {
   }
 };
 
+// obstacle/box: [min_x, min_y, min_z, max_x, max_y, max_z] (m, map frame), or none.
+std::optional<sim::Box> readObstacleBox(const ParameterSource& source) {
+  std::vector<double> corners;
+  if (!source.get("obstacle/box", &corners) || corners.empty()) return std::nullopt;
+  if (corners.size() != 6 || corners[0] >= corners[3] || corners[1] >= corners[4] ||
+      corners[2] >= corners[5]) {
+    throw std::invalid_argument(
+        "obstacle/box must be [min_x, min_y, min_z, max_x, max_y, max_z] with each min < max");
+  }
+  return sim::Box::axisAligned(Eigen::Vector3d(corners[0], corners[1], corners[2]),
+                               Eigen::Vector3d(corners[3], corners[4], corners[5]));
+}
+
 CirclePath readCirclePath(const ParameterSource& source) {
   CirclePath path;
   source.get("trajectory/center_x", &path.center_x);
@@ -92,6 +106,8 @@ class Simulator : public nodelet::Nodelet {
     }
     publishStaticTransforms();
     pause_service_ = getPrivateNodeHandle().advertiseService("pause", &Simulator::onPause, this);
+    obstacle_service_ =
+        getPrivateNodeHandle().advertiseService("set_obstacle", &Simulator::onSetObstacle, this);
     ros::NodeHandle& node_handle = getNodeHandle();
     tf_timer_ = node_handle.createTimer(
         ros::Duration(1.0 / tf_rate_),
@@ -114,7 +130,9 @@ class Simulator : public nodelet::Nodelet {
 
   void readParameters(const ParameterSource& parameters) {
     parameters.get("scene", &scene_name_);
-    scene_ = sceneNamed(scene_name_);
+    obstacle_ = readObstacleBox(parameters);
+    parameters.get("obstacle/present", &obstacle_present_);
+    composeScene();
     parameters.get("map_frame", &map_frame_);
     parameters.get("odom_frame", &odom_frame_);
     parameters.get("base_frame", &base_frame_);
@@ -176,6 +194,28 @@ class Simulator : public nodelet::Nodelet {
     return true;
   }
 
+  // The named scene, with the obstacle while it is present. Sensor timers and services share the
+  // nodelet's one callback queue, so no frame renders a scene being replaced.
+  void composeScene() {
+    scene_ = sceneNamed(scene_name_);
+    if (obstacle_ && obstacle_present_) scene_.add(*obstacle_);
+  }
+
+  // ~set_obstacle (std_srvs/SetBool): true puts obstacle/box into the scene, false takes it away.
+  bool onSetObstacle(std_srvs::SetBool::Request& request, std_srvs::SetBool::Response& response) {
+    if (!obstacle_) {
+      response.success = false;
+      response.message = "no obstacle/box given";
+      return true;
+    }
+    obstacle_present_ = request.data;
+    composeScene();
+    response.success = true;
+    response.message = obstacle_present_ ? "obstacle in the scene" : "obstacle taken away";
+    NODELET_INFO("%s", response.message.c_str());
+    return true;
+  }
+
   void publishStaticTransforms() {
     // Without drift odom coincides with map; with it, map -> odom moves (publishBodyPose).
     std::vector<geometry_msgs::TransformStamped> transforms;
@@ -228,6 +268,8 @@ class Simulator : public nodelet::Nodelet {
   }
 
   std::string scene_name_ = "room";
+  std::optional<sim::Box> obstacle_;
+  bool obstacle_present_ = true;
   sim::Scene scene_;
   std::string map_frame_ = "map";
   std::string odom_frame_ = "odom";
@@ -243,6 +285,7 @@ class Simulator : public nodelet::Nodelet {
   ros::Time pause_start_;
   ros::Duration paused_total_;
   ros::ServiceServer pause_service_;
+  ros::ServiceServer obstacle_service_;
   ros::Publisher path_publisher_;
   std::vector<ros::Time> keyframe_stamps_;  // of the keyframes published so far
   int published_keyframes_ = -1;

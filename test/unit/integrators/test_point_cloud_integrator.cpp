@@ -4,6 +4,7 @@
 #include <octomap/OcTree.h>
 #include <omp.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -461,6 +462,81 @@ TEST(VoxelUpdateSet, MarkingFreeTowardsTheEndEqualsMarkingEachVoxel) {
   EXPECT_GT(blocks_crossed, 400);
 }
 
+// clear_passed: a wall at x = 2 seen until clamped, then taken away (the cloud now ends on a wall
+// at x = 4 behind it). OctoMap's miss (log-odds -0.405) needs ceil(3.51 / 0.405) = 9 clouds to
+// bring the clamped voxels to free, the passed miss (-1.10) ceil(3.51 / 1.10) = 4.
+int cloudsUntilTheWallLeft(bool clear_passed, std::size_t* passed) {
+  VoxelMapConfig map_config;
+  map_config.resolution = 0.1;
+  VoxelMap map(map_config);
+  PointCloudIntegratorConfig config;
+  config.clear_passed = clear_passed;
+  const PointCloudIntegrator integrator(config);
+  std::mt19937 rng(3);
+  const Eigen::Vector3d origin = floatExact(0.01, 0.02, 1.03);
+  for (int i = 0; i < 10; ++i) integrator.integrate(wall(&rng, 2.0, 0.03), origin, &map);
+  const auto occupied_left = [&] {
+    std::size_t count = 0;
+    // The part of the old wall that rays to the new one pass (x = 2 is half way to x = 4).
+    const Eigen::AlignedBox3d seen(Eigen::Vector3d(1.8, -0.6, 0.6), Eigen::Vector3d(2.2, 0.6, 1.4));
+    map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+      const Eigen::Vector3d centre = (index.cast<double>().array() + 0.5) * map.resolution();
+      count += (seen.contains(centre) && log_odds > 0.0f) ? 1 : 0;
+    });
+    return count;
+  };
+  const std::size_t before = occupied_left();
+  EXPECT_GT(before, 100u);
+  *passed = 0;
+  for (int clouds = 1; clouds <= 20; ++clouds) {
+    *passed += integrator.integrate(wall(&rng, 4.0, 0.03), origin, &map).passed_voxels;
+    if (occupied_left() < before / 100) return clouds;
+  }
+  return -1;
+}
+
+TEST(PointCloudIntegrator, ClearPassedClearsWhatLeftInFourClouds) {
+  std::size_t passed = 0;
+  EXPECT_EQ(cloudsUntilTheWallLeft(false, &passed), 9);
+  EXPECT_EQ(passed, 0u);
+  EXPECT_EQ(cloudsUntilTheWallLeft(true, &passed), 4);
+  EXPECT_GT(passed, 100u);
+}
+
+// A surface the cloud still sees keeps OctoMap's update: the same clouds of a floor seen at a
+// grazing angle and a wall (rays to far floor points pass just above the near floor's voxels)
+// give the same occupied voxels with and without clear_passed.
+TEST(PointCloudIntegrator, ClearPassedLeavesASurfaceStillSeen) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> along(0.3, 6.0), across(-2.0, 2.0), noise(-0.01, 0.01);
+  std::vector<Cloud> clouds;
+  for (int c = 0; c < 8; ++c) {
+    Cloud cloud = wall(&rng, 6.0, 0.04);
+    for (int i = 0; i < 20000; ++i) {
+      cloud.emplace_back(along(rng), across(rng), noise(rng));  // the floor
+    }
+    clouds.push_back(cloud);
+  }
+  std::map<bool, std::set<Key>> occupied;
+  for (bool clear_passed : {false, true}) {
+    VoxelMapConfig map_config;
+    map_config.resolution = 0.05;
+    VoxelMap map(map_config);
+    PointCloudIntegratorConfig config;
+    config.clear_passed = clear_passed;
+    const PointCloudIntegrator integrator(config);
+    for (const Cloud& cloud : clouds) integrator.integrate(cloud, floatExact(0, 0, 0.8), &map);
+    map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+      if (log_odds > 0.0f) occupied[clear_passed].insert({index.x(), index.y(), index.z()});
+    });
+  }
+  EXPECT_GT(occupied[false].size(), 5000u);
+  std::size_t kept = 0;
+  for (const Key& key : occupied[false]) kept += occupied[true].count(key);
+  EXPECT_GE(static_cast<double>(kept), 0.995 * static_cast<double>(occupied[false].size()));
+  EXPECT_LE(occupied[true].size(), occupied[false].size());
+}
+
 TEST(PointCloudIntegratorConfig, RejectsNaNMaxRange) {
   PointCloudIntegratorConfig config;
   config.max_range = std::nan("");
@@ -468,6 +544,13 @@ TEST(PointCloudIntegratorConfig, RejectsNaNMaxRange) {
   EXPECT_THROW(PointCloudIntegrator{config}, std::invalid_argument);
   config.max_range = -1.0;
   EXPECT_NO_THROW(config.validate());
+  for (double probability : {0.0, 0.5, std::nan("")}) {
+    config.passed_miss_probability = probability;
+    EXPECT_THROW(config.validate(), std::invalid_argument) << probability;
+  }
+  config.passed_miss_probability = 0.25;
+  config.passed_margin = -1;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
 }
 
 }  // namespace
