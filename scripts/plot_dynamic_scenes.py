@@ -34,12 +34,16 @@ def main():
             share = int(row["ghost"]) / held
             series[(row["event"], row["mapper"])].append((int(row["frames_without_object"]), share))
     events = sorted({event for event, _ in series})
+    # One colour per mapper in every panel (a panel may lack a mapper that mapped nothing).
+    mappers = sorted({mapper for _, mapper in series})
+    colours = {mapper: f"C{i}" for i, mapper in enumerate(mappers)}
     figure, axes = plt.subplots(1, len(events), figsize=(5 * len(events), 4), squeeze=False)
     for axis, event in zip(axes[0], events):
         for (line_event, mapper), points in sorted(series.items()):
             if line_event != event:
                 continue
-            axis.plot([p[0] for p in points], [p[1] for p in points], label=mapper)
+            axis.plot([p[0] for p in points], [p[1] for p in points], label=mapper,
+                      color=colours[mapper])
         axis.axhline(0.05, color="grey", linestyle="--", linewidth=0.8)
         axis.axvline(5, color="grey", linestyle=":", linewidth=0.8)
         axis.set_title(f"{event}, {args.resolution} m, {args.speed} m/s")
