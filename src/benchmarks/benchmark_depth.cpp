@@ -149,7 +149,8 @@ OursResult runOurs(const std::vector<SevenScenesFrame>& frames, const CameraIntr
     frame_ms.push_back(millisecondsSince(start));
     frame_cpu_ms.push_back(processCpuMilliseconds() - cpu_start);
     total_ms += frame_ms.back();
-    updates += stats.voxels_updated;
+    // Skipped no-ops (clamped free in front of every surface) are updates of the method too.
+    updates += stats.voxels_updated + stats.voxels_unchanged;
   }
   if (!image_path.empty() &&
       !cv::imwrite(image_path, renderOccupied(map, camera, frames.front().T_world_camera))) {

@@ -821,6 +821,31 @@ bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
   return spilled_.find(key) != spilled_.end() && readSpilled(key, out);
 }
 
+std::vector<VoxelMap::VoxelMask> VoxelMap::voxelsAtLowerBound(
+    const std::vector<BlockIndex>& blocks) const {
+  std::vector<VoxelMask> masks(blocks.size());
+  const float lower = minLogOdds();
+  std::shared_lock<std::shared_mutex> lock(mutex_);
+  const int count = static_cast<int>(blocks.size());
+#pragma omp parallel for schedule(dynamic, 64) if (count >= 256)
+  for (int i = 0; i < count; ++i) {
+    const StoredBlock* found = findBlock(blocks[static_cast<std::size_t>(i)]);
+    if (found == nullptr) continue;
+    VoxelBlock expanded;
+    const VoxelBlock* block = found->isDense() ? found->dense() : nullptr;
+    if (block == nullptr) {
+      found->copyTo(&expanded);
+      block = &expanded;
+    }
+    VoxelMask& mask = masks[static_cast<std::size_t>(i)];
+    // Eq. 3's clamping leaves a voxel at exactly the bound.
+    for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+      if (block->log_odds[linear] == lower) mask.set(linear);
+    }
+  }
+  return masks;
+}
+
 MapChanges VoxelMap::changesSince(std::uint64_t version) const {
   std::shared_lock<std::shared_mutex> lock(mutex_);
   MapChanges changes;

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <bitset>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -250,6 +251,11 @@ class VoxelMap {
   void forEachBlock(const std::function<void(const BlockIndex&, const VoxelBlock&)>& fn) const;
   // Copies one block; false if it is not allocated.
   bool copyBlock(const BlockIndex& block, VoxelBlock* out) const;
+  // Per block (under one shared lock): the voxels held exactly at the lower clamping bound (a
+  // clamped-free voxel, which a negative update leaves as it is). Blocks not held in memory
+  // (absent or spilled) get an empty mask.
+  using VoxelMask = std::bitset<VoxelBlock::kVolume>;
+  std::vector<VoxelMask> voxelsAtLowerBound(const std::vector<BlockIndex>& blocks) const;
   // Every block, copied under one shared lock: a consistent snapshot for long work (converting
   // the whole map to a file or a message) that must not keep writers waiting while it runs.
   using BlockCopy = std::pair<BlockIndex, VoxelBlock>;

@@ -177,6 +177,10 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
   const Eigen::Vector3i last = (box.max() / block_size).array().floor().cast<int>();
   const double radius = 0.5 * std::sqrt(3.0) * block_size;
   const double t0 = pyramid.threshold(0);
+  // A hundredth of a sigma short of Eq. 7's crossing of 0.5 (the table interpolates it to 2e-6
+  // in log-odds).
+  const double free_slab_metres =
+      (DepthInverseModel::supportSigmas() - model_.freeBeyondSigmas() - 0.01) * config_.sigma;
 
   // nullopt: the block gets nothing.
   auto classify = [&](const BlockIndex& block) -> std::optional<CandidateBlock> {
@@ -222,6 +226,15 @@ std::vector<PyramidDepthIntegrator::CandidateBlock> PyramidDepthIntegrator::cull
     if (footprint_valid && !table_.empty()) {
       candidate.front = std::nextafter(footprint_front, -std::numeric_limits<float>::infinity());
     }
+    // Eq. 7 stays below 0.5 from freeBeyondSigmas() in front of a measurement: each tile's
+    // nearest - that sigma(farthest) is at least its front + (support - free) sigma, sigma at its
+    // smallest (exact for constant sigma). Invalid pixels give no update, so the valid ones'
+    // bound holds whatever else the footprint holds (not for Eq. 8-9, which reads pixel rays).
+    if (config_.method != DepthMethod::kIdeal) {
+      candidate.free_front = std::nextafter(static_cast<float>(footprint_front + free_slab_metres),
+                                            -std::numeric_limits<float>::infinity());
+    }
+    candidate.near = static_cast<float>(near);
     return candidate;
   };
 

@@ -44,6 +44,11 @@ std::optional<double> DepthInverseModel::logOddsAtOffset(double offset) const {
 
 double DepthInverseModel::supportSigmas() { return kGaussianSupportSigmas; }
 
+double DepthInverseModel::freeBeyondSigmas() const {
+  const double amplitude = peakAmplitude(k_, reach_.sigma);
+  return std::sqrt(2.0 * std::log((amplitude + 0.2) / 0.2));
+}
+
 double DepthInverseModel::peakAmplitude(double k, double sigma) { return k / (sigma * kSqrtTwoPi); }
 
 OffsetLogOddsTable::OffsetLogOddsTable(const DepthInverseModel& model)

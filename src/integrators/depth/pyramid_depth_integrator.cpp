@@ -70,14 +70,40 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   // calling thread: malloc maps a fresh buffer of that size anew for each frame, and the threads
   // filling it take a page fault per 4 KiB (about 1100 per frame at 0.02 m on 7-Scenes).
   float* const deltas = deltaBuffer(static_cast<std::size_t>(count) * VoxelBlock::kVolume);
+  // What the map holds clamped free in front of every surface it sees stays as it is: those
+  // voxels are skipped (blocks where some voxel may lie nearer than free_front).
+  // Only where that slab of Eq. 7 (from supportSigmas() to freeBeyondSigmas() in front of a
+  // surface) is several voxels deep: on 7-Scenes it skips 30 % of the updates at 0.02 m (13 %
+  // less CPU a frame) and 18 % at 0.04 m (5 %); at 0.08 m, 7 %, reading the blocks costs what
+  // skipping saves.
+  constexpr double kMinSlabVoxels = 5.0;
+  const bool skip_settled =
+      (DepthInverseModel::supportSigmas() - model_.freeBeyondSigmas()) * config_.sigma >=
+      kMinSlabVoxels * map->resolution();
+  std::vector<int> maybe_settled;
+  std::vector<BlockIndex> settled_blocks;
+  for (int i = 0; i < count && skip_settled; ++i) {
+    if (candidates[i].near < candidates[i].free_front) {
+      maybe_settled.push_back(i);
+      settled_blocks.push_back(candidates[i].index);
+    }
+  }
+  const std::vector<VoxelMap::VoxelMask> clamped = map->voxelsAtLowerBound(settled_blocks);
+  std::vector<const VoxelMap::VoxelMask*> clamped_free(count, nullptr);
+  for (std::size_t k = 0; k < maybe_settled.size(); ++k) {
+    if (clamped[k].any()) clamped_free[maybe_settled[k]] = &clamped[k];
+  }
   std::vector<int> updated(count, 0);
-#pragma omp parallel for schedule(dynamic, 8)
+  int unchanged = 0;
+#pragma omp parallel for schedule(dynamic, 8) reduction(+ : unchanged)
   for (int i = 0; i < count; ++i) {
     updated[i] = blockLogOdds(frame, candidates[i], *map,
-                              &deltas[static_cast<std::size_t>(i) * VoxelBlock::kVolume]);
+                              &deltas[static_cast<std::size_t>(i) * VoxelBlock::kVolume],
+                              clamped_free[i], &unchanged);
   }
 
   DepthIntegrationStats stats;
+  stats.voxels_unchanged = static_cast<std::size_t>(unchanged);
   stats.candidate_blocks = candidates.size();
   std::vector<BlockIndex> touched;
   SpatialKeyMap<int> slot_of;

@@ -343,9 +343,19 @@ Eigen::Vector3d voxelCenter(const VoxelIndex& index, double resolution) {
 }  // namespace
 
 int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,
-                                         const VoxelMap& map, float* deltas) const {
+                                         const VoxelMap& map, float* deltas,
+                                         const std::bitset<VoxelBlock::kVolume>* clamped_free,
+                                         int* unchanged) const {
   std::fill(deltas, deltas + VoxelBlock::kVolume, kNaN);
   int count = 0;
+  // A voxel clamped free and nearer than free_front: its update is negative (or none), a no-op.
+  const auto settled = [&](int linear, double distance) {
+    if (clamped_free == nullptr || !clamped_free->test(linear) || !(distance < block.free_front)) {
+      return false;
+    }
+    ++*unchanged;
+    return true;
+  };
   if (config_.method == DepthMethod::kIdeal) {
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       const std::optional<float> delta =
@@ -372,6 +382,7 @@ int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const Candidat
         // The same tests as projectedLogOdds, then the block's bounds before the pyramid.
         double u = 0.0, v = 0.0, distance = 0.0;
         if (!projectIntoImage(camera, point, &u, &v, &distance)) continue;
+        if (settled(VoxelBlock::linearIndex(x, y, z), distance)) continue;
         float delta = far_in_front;
         if (!block.far_in_front && !(distance < block.front)) {
           if (distance > block.reach) continue;

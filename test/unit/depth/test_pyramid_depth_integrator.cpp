@@ -232,6 +232,45 @@ TEST_P(WallTest, EveryVoxelOfTheFrustumGetsItsPerVoxelValueUnderATiltedPose) {
   EXPECT_EQ(mismatches, 0u);
 }
 
+// Voxels clamped free in front of every surface they see are skipped (their update is a no-op):
+// frames from a camera moving past a slanted wall, mapped until most of the free space is
+// clamped, give the map voxel-by-voxel updates give, bit for bit, with many voxels skipped.
+TEST_P(WallTest, SkippingClampedFreeVoxelsLeavesTheMapBitForBit) {
+  if (GetParam() == DepthMethod::kIdeal) GTEST_SKIP() << "Eq. 8-9 read every pixel ray: no skip";
+  std::vector<float> depth(64 * 48);
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) depth[v * 64 + u] = static_cast<float>(1.6 + 0.015 * u);
+  }
+  depth[5 * 64 + 7] = std::nanf("");  // an invalid pixel: its cells give nothing
+  const DepthImageView view{64, 48, depth.data()};
+  const PyramidDepthIntegrator integrator(config_);
+  VoxelMap reference(mapConfig());
+  std::size_t skipped = 0;
+  for (int frame_number = 0; frame_number < 12; ++frame_number) {
+    const Eigen::Isometry3d pose =
+        Eigen::Translation3d(0.013 * frame_number, -0.007 * frame_number, 0.0) *
+        Eigen::AngleAxisd(0.01 * frame_number, Eigen::Vector3d::UnitY());
+    skipped += integrator.integrate(view, camera_, pose, &map_).voxels_unchanged;
+    const DepthFrame frame = integrator.prepare(view, camera_, pose, kResolution);
+    for (const BlockIndex& block : integrator.candidateBlocks(frame)) {
+      for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
+        const VoxelIndex index = VoxelMap::voxelIndex(block, linear);
+        const std::optional<float> delta =
+            integrator.voxelLogOdds(frame, reference.centerOf(index));
+        if (delta) reference.updateVoxel(index, *delta);
+      }
+    }
+  }
+  EXPECT_GT(skipped, 20000u);
+  EXPECT_EQ(map_.knownVoxelCount(), reference.knownVoxelCount());
+  std::size_t mismatches = 0;
+  reference.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+    const std::optional<float> value = map_.logOdds(index);
+    if (!value || *value != log_odds) ++mismatches;
+  });
+  EXPECT_EQ(mismatches, 0u);
+}
+
 TEST_P(WallTest, InvalidPixelsChangeNothing) {
   // 0, NaN and beyond max_range (10 m) everywhere: no block allocated, a prior value untouched.
   std::vector<float> depth(64 * 48, 0.0f);

@@ -141,6 +141,27 @@ TEST(VoxelMap, UnknownIsNotFreeAndUpdatesAccumulateWithClamping) {
   EXPECT_EQ(map.knownVoxelCount(), 1u);
 }
 
+// The depth mapper's skip of no-op updates reads which voxels sit at the lower clamping bound,
+// dense and sparse (hybrid) blocks alike; absent blocks give an empty mask.
+TEST(VoxelMap, VoxelsAtTheLowerBoundAreMaskedPerBlock) {
+  for (BlockStorage storage : {BlockStorage::kDense, BlockStorage::kHybrid}) {
+    VoxelMapConfig config = defaultConfig();
+    config.block_storage = storage;
+    VoxelMap map(config);
+    const float miss = map.model().missLogOdds();
+    const VoxelIndex clamped(1, 2, 3), nearly(2, 2, 3), elsewhere(9, 0, 0);
+    for (int i = 0; i < 40; ++i) map.updateVoxel(clamped, miss);
+    map.updateVoxel(nearly, miss);
+    for (int i = 0; i < 40; ++i) map.updateVoxel(elsewhere, miss);
+    const std::vector<VoxelMap::VoxelMask> masks =
+        map.voxelsAtLowerBound({VoxelMap::blockOf(clamped), BlockIndex(5, 5, 5)});
+    ASSERT_EQ(masks.size(), 2u);
+    EXPECT_EQ(masks[0].count(), 1u);
+    EXPECT_TRUE(masks[0].test(VoxelMap::linearIndexInBlock(clamped)));
+    EXPECT_TRUE(masks[1].none());
+  }
+}
+
 TEST(VoxelMap, BatchUpdatesEqualSingleUpdates) {
   VoxelMap batch(defaultConfig());
   VoxelMap single(defaultConfig());

@@ -37,6 +37,11 @@ class DepthInverseModel {
   // k / (sigma sqrt(2 pi)): Eq. 7 peaks at 0.5 plus this at the measurement.
   static double peakAmplitude(double k, double sigma);
   float farInFrontLogOdds() const { return far_in_front_log_odds_; }
+  // Offset in sigmas (positive) beyond which, in front of a measurement, Eq. 7 stays below 0.5
+  // at every measured distance: 0.3 + (a + 0.2) exp(-x^2 / 2) = 0.5 at the largest amplitude a
+  // (sigma at its smallest). A voxel that far in front of every cell it reads gets a negative
+  // update, which a voxel clamped free ignores.
+  double freeBeyondSigmas() const;
   // False when the voxel lies too far behind the measurement to learn anything from it.
   bool informs(double distance, double measured) const { return distance <= reach_.of(measured); }
   const MeasurementReach& reach() const { return reach_; }
