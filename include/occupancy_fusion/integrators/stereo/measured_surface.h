@@ -69,7 +69,7 @@ struct MeasuredSurfaceConfig {
   // line of samples through the grid point (4 of 25 values), so a patch at the border alone
   // decided it; and they are read by every voxel whose centre lies just outside the image (the
   // reach of depthAt). New space entering the image at a border (sideways motion) got the
-  // patch's phantom (docs/disparity_method.md, "A second check outside the matrix"). On a plane
+  // patch's phantom (docs/design_notes.md, "The border rule"). On a plane
   // the extrapolation is exact. Wider bands (8 and 12 px) rejected more of those phantoms but
   // cost turning motions coverage and false-occupied voxels (measured there).
   bool border_from_interior = true;

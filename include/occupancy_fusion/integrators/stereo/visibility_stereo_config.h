@@ -81,7 +81,7 @@ struct VisibilityStereoConfig {
   // 0.5 does not block a ray that the frame shows passing. Off by default: since voxels over
   // invalid pixels read the surface next to them it no longer carries coverage, and with it a
   // noisy frame's free space wore down walls the map knew (1 px of noise: false-occupied up to
-  // 0.249 of the OctoMap mode's, 0.179 without; docs/disparity_method.md).
+  // 0.249 of the OctoMap mode's, 0.179 without; docs/design_notes.md).
   bool measured_fuse_known = false;
   // The prior of Eq. 4-6 of a never-observed voxel is the measurement's P(O) where that is below
   // unknown_occupancy: a hit in space the frame's surface shows free (a phantom of a patch shifted
@@ -116,7 +116,7 @@ struct VisibilityStereoConfig {
   //  - kVisibility: the rays of the nearest and the farthest point (one if the voxel has one
   //    point), each with its own range sigma (Eq. 7), as one walk to the farthest point that
   //    carries both points' P(I_v): the two rays cross the same voxels but for one at a corner
-  //    now and then, and a second walk cost a quarter of a frame (docs/disparity_benchmark.md). The
+  //    now and then, and a second walk cost a quarter of a frame (docs/design_notes.md). The
   //    frame's reduction takes the largest P(I_v) per voxel (StereoVoxelUpdate): in the end voxel
   //    and before it that is the nearest point's, since Phi((s - r) / sigma_r) grows as r falls.
   //    Eq. 8 puts the full hit ~2.3 sigma past a point, so the bundle's hits span from the nearest
