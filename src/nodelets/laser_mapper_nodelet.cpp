@@ -110,7 +110,7 @@ class LaserMapper : public MapperNodeletBase {
     source->config = config;
     source->subscriber.subscribe(getNodeHandle(), config.topic, queueSize());
     std::vector<std::string> targets = {config_.local_grid.frame_id};
-    if (config_.write_world_layer) targets.push_back(map().frameId());
+    if (config_.write_world_layer) targets.push_back(placementFrame());
     source->filter = makeTransformFilter<ScanMessage>(
         source->subscriber, targets,
         [this, source](const ScanMessage& scan) { return onScan(scan, source); },
@@ -135,9 +135,9 @@ class LaserMapper : public MapperNodeletBase {
       // Both poses first, so a failed lookup leaves both products untouched.
       vehicle_T_sensor = tf2::transformToEigen(tfBuffer().lookupTransform(
           config_.local_grid.frame_id, sensor_frame, message.header.stamp));
-      if (config_.write_world_layer) {
+      if (config_.write_world_layer) {  // with reanchoring the session places it by odometry
         frame.header.T_map_sensor = tf2::transformToEigen(
-            tfBuffer().lookupTransform(map().frameId(), sensor_frame, message.header.stamp));
+            tfBuffer().lookupTransform(placementFrame(), sensor_frame, message.header.stamp));
       }
     } catch (const std::exception& error) {  // bad scan, tf2 lookup
       reject(source, kRejected, error.what());

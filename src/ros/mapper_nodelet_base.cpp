@@ -38,6 +38,13 @@ void MapperNodeletBase::setUpMapper(
   }
 }
 
+std::string MapperNodeletBase::placementFrame() const {
+  const ReanchoringConfig& reanchoring = map_->config().reanchoring;
+  const bool by_path =
+      map_->reanchoring() != nullptr && reanchoring.source == ReanchoringConfig::Source::kPath;
+  return by_path ? reanchoring.odom_frame : map_->frameId();
+}
+
 void MapperNodeletBase::startSession(MappingSessionConfig config) {
   config.frame_id = map_->frameId();
   config.map = map_->config().voxels;

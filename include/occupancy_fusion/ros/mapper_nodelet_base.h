@@ -122,22 +122,29 @@ class MapperNodeletBase : public nodelet::Nodelet {
     return filter;
   }
 
-  // The usual filter: into the map frame. A message without a transform in time is warned about
-  // (throttled), naming it `what` ("cloud", "depth image").
+  // The frame a sensor's pose is needed in: the map's; with reanchoring from a SLAM path, the
+  // odometry's (the session places each frame by odom -> sensor and the path's corrections, and
+  // a system that publishes a path need not publish map -> odom).
+  std::string placementFrame() const;
+
+  // The usual filter: into placementFrame(). A message without a transform in time is warned
+  // about (throttled), naming it `what` ("cloud", "depth image").
   template <class Message, class Input>
   std::unique_ptr<tf2_ros::MessageFilter<Message>> makeMapFrameFilter(
       Input& input, const std::string& what, std::function<bool(const Message&)> on_message) {
+    const std::string target = placementFrame();
     return makeTransformFilter<Message>(
-        input, {map_->frameId()}, std::move(on_message), [this, what](const Message& m) {
+        input, {target}, std::move(on_message), [this, what, target](const Message& m) {
           NODELET_WARN_THROTTLE(5.0, "no transform from '%s' to '%s' at %.3f: %s dropped",
-                                m.header.frame_id.c_str(), map_->frameId().c_str(),
-                                m.header.stamp.toSec(), what.c_str());
+                                m.header.frame_id.c_str(), target.c_str(), m.header.stamp.toSec(),
+                                what.c_str());
         });
   }
 
-  // The pose of `sensor_frame` (by default the message's frame) in `frame` (by default the map
-  // frame) at the message's exact stamp, for the frame's T_map_sensor: the session then checks it
-  // (a pose that is not finite is dropped there). Without one, the message is counted as dropped
+  // The pose of `sensor_frame` (by default the message's frame) in `frame` (by default
+  // placementFrame()) at the message's exact stamp, for the frame's T_map_sensor: the session then
+  // checks it (a pose that is not finite is dropped there; with reanchoring it places the frame
+  // by odometry itself). Without one, the message is counted as dropped
   // (a tf failure), warned about (throttled) and nullopt returned. A template so that each mapper
   // keeps its own throttled warning.
   template <class Message>
@@ -146,7 +153,7 @@ class MapperNodeletBase : public nodelet::Nodelet {
                                              const std::string& frame = "") {
     try {
       return tf2::transformToEigen(tf_buffer_->lookupTransform(
-          frame.empty() ? map_->frameId() : frame,
+          frame.empty() ? placementFrame() : frame,
           sensor_frame.empty() ? message.header.frame_id : sensor_frame, message.header.stamp));
     } catch (const tf2::TransformException& error) {
       frames_.countDropped(FrameStatistics::kTfLookup);

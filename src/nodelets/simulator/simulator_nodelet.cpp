@@ -162,6 +162,7 @@ class Simulator : public nodelet::Nodelet {
             "trajectory/type loop drives the building's corridor loop: scene must be building");
       }
       loop_.emplace(readLoopMotionConfig(parameters), tf_rate_);
+      parameters.get("localisation/publish_map_to_odom", &publish_map_to_odom_);
     } else {
       throw std::invalid_argument("trajectory/type must be circle or loop; got '" + type + "'");
     }
@@ -242,7 +243,7 @@ class Simulator : public nodelet::Nodelet {
     const int frame = loop_->frameAt(pathSeconds(stamp));
     std::vector<geometry_msgs::TransformStamped> transforms = {
         transformMessage(loop_->odometry(frame), odom_frame_, base_frame_, stamp)};
-    if (drifting()) {
+    if (drifting() && publish_map_to_odom_) {
       transforms.push_back(
           transformMessage(loop_->mapToOdom(frame), map_frame_, odom_frame_, stamp));
     }
@@ -276,7 +277,8 @@ class Simulator : public nodelet::Nodelet {
   std::string base_frame_ = "base_link";
   double tf_rate_ = 30.0;
   CirclePath path_;
-  std::optional<LoopMotion> loop_;  // trajectory/type loop
+  std::optional<LoopMotion> loop_;   // trajectory/type loop
+  bool publish_map_to_odom_ = true;  // localisation/publish_map_to_odom (with drift)
   std::vector<std::unique_ptr<SimulatedSensor>> sensors_;
 
   ros::Time start_;
