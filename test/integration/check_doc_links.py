@@ -22,7 +22,8 @@ import pathlib
 import re
 import sys
 import urllib.parse
-import xml.etree.ElementTree as ElementTree
+
+import junit_report  # beside this script
 
 PAGE_GLOBS = ["README.md", "docs/*.md"]
 # A link known to exist: README.md's link to the user guide (the extraction must find it).
@@ -188,21 +189,10 @@ def pages_of(root):
 
 def write_junit(path, results, extraction_problems):
     """One test case per page (its broken links as the failure), one for the extraction."""
-    suite = ElementTree.Element("testsuite", name="doc_links")
-    cases = [("extraction", extraction_problems)]
-    cases += [(page, [f"line {line}: ({target}) {why}" for line, target, why in broken])
+    cases = [("extraction", extraction_problems, None)]
+    cases += [(page, [f"line {line}: ({target}) {why}" for line, target, why in broken], None)
               for page, broken in results]
-    for name, problems in cases:
-        case = ElementTree.SubElement(suite, "testcase", classname="doc_links", name=name)
-        if problems:
-            failure = ElementTree.SubElement(case, "failure", message=f"{len(problems)} broken")
-            failure.text = "\n".join(problems)
-    suite.set("tests", str(len(cases)))
-    suite.set("failures", str(sum(1 for _, problems in cases if problems)))
-    suite.set("errors", "0")
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    ElementTree.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
+    junit_report.write_suite(path, "doc_links", cases, "broken")
 
 
 def main():

@@ -20,7 +20,8 @@ import argparse
 import pathlib
 import re
 import sys
-import xml.etree.ElementTree as ElementTree
+
+import junit_report  # beside this script
 
 # Where the nodelets' parameters are read (the offline tools read the same YAML through the same
 # readers).
@@ -98,22 +99,10 @@ def write_junit(path, keys, missing, extraction_missing):
             by_file.setdefault(source, [])
             if key in missing:
                 by_file[source].append(f"{key} (line {line})")
-    suite = ElementTree.Element("testsuite", name="parameters_documented")
-    cases = [("extraction", [f"'{key}' not found in the sources" for key in extraction_missing])]
-    cases += [(source, undocumented) for source, undocumented in sorted(by_file.items())]
-    for name, problems in cases:
-        case = ElementTree.SubElement(suite, "testcase", classname="parameters_documented",
-                                      name=name)
-        if problems:
-            failure = ElementTree.SubElement(case, "failure",
-                                             message=f"{len(problems)} undocumented")
-            failure.text = "\n".join(problems)
-    suite.set("tests", str(len(cases)))
-    suite.set("failures", str(sum(1 for _, problems in cases if problems)))
-    suite.set("errors", "0")
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    ElementTree.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
+    cases = [("extraction", [f"'{key}' not found in the sources" for key in extraction_missing],
+              None)]
+    cases += [(source, undocumented, None) for source, undocumented in sorted(by_file.items())]
+    junit_report.write_suite(path, "parameters_documented", cases, "undocumented")
 
 
 def main():

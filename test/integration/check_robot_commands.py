@@ -52,6 +52,8 @@ import sys
 import tempfile
 import xml.etree.ElementTree as ElementTree
 
+import junit_report  # beside this script
+
 PAGE = "docs/on_your_robot.md"
 PACKAGE = "occupancy_fusion"
 ROS_COMMANDS = ("roslaunch", "rosrun", "rosservice", "rosparam", "rostopic")
@@ -532,7 +534,6 @@ def check_page(root, roslaunch):
 
 
 def write_junit(path, commands, roslaunch, extraction_problems):
-    suite = ElementTree.Element("testsuite", name="robot_commands")
     cases = [("extraction", extraction_problems, None)]
     for command in commands:
         name = f"line {command.line}: {command.text[:100]}"
@@ -544,21 +545,7 @@ def write_junit(path, commands, roslaunch, extraction_problems):
             elif command.ros_check is not None:
                 cases.append((f"line {command.line}: roslaunch --dump-params",
                               command.ros_check[0], None))
-    for name, problems, skipped in cases:
-        case = ElementTree.SubElement(suite, "testcase", classname="robot_commands", name=name)
-        if problems:
-            failure = ElementTree.SubElement(case, "failure", message=f"{len(problems)} problems")
-            failure.text = "\n".join(problems)
-        elif skipped:
-            ElementTree.SubElement(case, "skipped", message=skipped)
-    suite.set("tests", str(len(cases)))
-    suite.set("failures", str(sum(1 for _, problems, _ in cases if problems)))
-    suite.set("skipped", str(sum(1 for _, problems, skipped in cases
-                                 if skipped and not problems)))
-    suite.set("errors", "0")
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    ElementTree.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
+    junit_report.write_suite(path, "robot_commands", cases)
 
 
 def main():
