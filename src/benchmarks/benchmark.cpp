@@ -252,13 +252,13 @@ const std::vector<Workload>& workloads() {
       {"depth",
        "<folder> [--resolution R[,R...]] [--frames N] [--octomap-frames K] [--peer-frames P]\n"
        "      [--k K] [--sigma S] [--sigma_quadratic Q] [--method pyramid|andert|ideal]\n"
-       "      [--image PNG] [--finer_layers F]\n"
+       "      [--image PNG] [--finer_layers F] [--clear_passed 0|1]\n"
        "      a depth sequence in the 7-Scenes layout through the pyramidal depth integrator,\n"
        "      and K of its frames as point clouds through octomap::OcTree::insertPointCloud\n"
        "      (plain and discretized); speedup is octomap / ours in ms per frame; the peers\n"
        "      compiled in on P frames (default all), paired frame by frame with ours",
        {"folder", "resolution", "frames", "octomap-frames", "peer-frames", "k", "sigma",
-        "sigma_quadratic", "method", "image", "finer_layers"},
+        "sigma_quadratic", "method", "image", "finer_layers", "clear_passed"},
        runDepth},
       {"depth-fig5",
        "[--output PNG] [--sweep_max PX] [--finer_layers F]\n"
@@ -272,11 +272,12 @@ const std::vector<Workload>& workloads() {
        "      [--k K] [--sigma S] [--sigma_quadratic Q] [--unknown_behind_sigmas U]\n"
        "      [--max_range M] [--clamp on|off] [--observe_views N] [--score_every N]\n"
        "      [--region auto|frustum|surface] [--points_csv PREFIX] [--finer_layers F]\n"
+       "      [--clear_passed 0|1]\n"
        "      Pirker et al. Sec. 5.1: N of the 181 sweep views of BOX / SPHERES; surface points\n"
        "      within one voxel of the p = 0.5 iso-surface, observed free voxels labelled free",
        {"scenes", "methods", "views", "resolution", "k", "sigma", "sigma_quadratic",
         "unknown_behind_sigmas", "max_range", "clamp", "observe_views", "score_every", "points_csv",
-        "region", "finer_layers"},
+        "region", "finer_layers", "clear_passed"},
        runDepthAccuracy},
       {"laser",
        "<CARMEN log, .gz accepted> [--scans N] [--resolution R] [--sigma S] [--free_length L]\n"

@@ -210,6 +210,7 @@ int runDepth(const CommandLine& args) {
   config.sigma_quadratic = args.doubleValue("sigma_quadratic", 0.0);
   config.method = depthMethodFromString(args.value("method", "pyramid"));
   config.finer_layers = args.intValue("finer_layers", 0);
+  config.clear_passed = args.intValue("clear_passed", 0) != 0;  // not the paper unless 0
   const PyramidDepthIntegrator integrator(config);
 
   const CameraIntrinsics& camera = folder.camera();

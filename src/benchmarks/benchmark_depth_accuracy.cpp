@@ -356,7 +356,8 @@ int runDepthAccuracy(const CommandLine& args) {
   config.k = args.doubleValue("k", config.sigma);
   config.sigma_quadratic = args.doubleValue("sigma_quadratic", 0.0);
   config.unknown_behind_sigmas = args.doubleValue("unknown_behind_sigmas", 3.0);
-  config.finer_layers = args.intValue("finer_layers", 0);  // not the paper unless 0
+  config.finer_layers = args.intValue("finer_layers", 0);       // not the paper unless 0
+  config.clear_passed = args.intValue("clear_passed", 0) != 0;  // nor unless 0
   config.max_range = max_range;
   const CameraIntrinsics camera = sim::pirkerSyntheticCamera();
   std::printf(

@@ -821,10 +821,11 @@ bool VoxelMap::copyBlock(const BlockIndex& block, VoxelBlock* out) const {
   return spilled_.find(key) != spilled_.end() && readSpilled(key, out);
 }
 
-std::vector<VoxelMap::VoxelMask> VoxelMap::voxelsAtLowerBound(
+std::vector<VoxelMap::VoxelStates> VoxelMap::voxelStates(
     const std::vector<BlockIndex>& blocks) const {
-  std::vector<VoxelMask> masks(blocks.size());
+  std::vector<VoxelStates> states(blocks.size());
   const float lower = minLogOdds();
+  const float threshold = config_.model.thresholdLogOdds();
   std::shared_lock<std::shared_mutex> lock(mutex_);
   const int count = static_cast<int>(blocks.size());
 #pragma omp parallel for schedule(dynamic, 64) if (count >= 256)
@@ -837,13 +838,15 @@ std::vector<VoxelMap::VoxelMask> VoxelMap::voxelsAtLowerBound(
       found->copyTo(&expanded);
       block = &expanded;
     }
-    VoxelMask& mask = masks[static_cast<std::size_t>(i)];
-    // Eq. 3's clamping leaves a voxel at exactly the bound.
+    VoxelStates& state = states[static_cast<std::size_t>(i)];
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
-      if (block->log_odds[linear] == lower) mask.set(linear);
+      // Eq. 3's clamping leaves a voxel at exactly the bound; unknown (NaN) is neither.
+      const float value = block->log_odds[linear];
+      if (value == lower) state.at_lower_bound.set(linear);
+      if (value > threshold) state.occupied.set(linear);
     }
   }
-  return masks;
+  return states;
 }
 
 MapChanges VoxelMap::changesSince(std::uint64_t version) const {

@@ -42,6 +42,9 @@ PyramidDepthConfig readPyramidDepthConfig(const ParameterSource& source) {
   source.get(kKeyPrefix + "unknown_behind_sigmas", &config.unknown_behind_sigmas);
   source.get(kKeyPrefix + "max_pyramid_levels", &config.max_pyramid_levels);
   source.get(kKeyPrefix + "finer_layers", &config.finer_layers);
+  source.get(kKeyPrefix + "clear_passed", &config.clear_passed);
+  source.get(kKeyPrefix + "passed_sigmas", &config.passed_sigmas);
+  source.get(kKeyPrefix + "passed_miss_probability", &config.passed_miss_probability);
   try {
     config.validate();
   } catch (const std::invalid_argument& error) {

@@ -252,10 +252,14 @@ class VoxelMap {
   // Copies one block; false if it is not allocated.
   bool copyBlock(const BlockIndex& block, VoxelBlock* out) const;
   // Per block (under one shared lock): the voxels held exactly at the lower clamping bound (a
-  // clamped-free voxel, which a negative update leaves as it is). Blocks not held in memory
-  // (absent or spilled) get an empty mask.
+  // clamped-free voxel, which a negative update leaves as it is) and those classified occupied.
+  // Blocks not held in memory (absent or spilled) get empty masks.
   using VoxelMask = std::bitset<VoxelBlock::kVolume>;
-  std::vector<VoxelMask> voxelsAtLowerBound(const std::vector<BlockIndex>& blocks) const;
+  struct VoxelStates {
+    VoxelMask at_lower_bound;
+    VoxelMask occupied;
+  };
+  std::vector<VoxelStates> voxelStates(const std::vector<BlockIndex>& blocks) const;
   // Every block, copied under one shared lock: a consistent snapshot for long work (converting
   // the whole map to a file or a message) that must not keep writers waiting while it runs.
   using BlockCopy = std::pair<BlockIndex, VoxelBlock>;

@@ -11,7 +11,8 @@ namespace occupancy_fusion {
 
 // depth/method (pyramid | andert | ideal), depth/k, depth/sigma (m), depth/sigma_quadratic
 // (1/m), depth/min_range (m), depth/max_range (m), depth/unknown_behind_sigmas,
-// depth/max_pyramid_levels. Validates what it read; throws std::invalid_argument naming the
+// depth/max_pyramid_levels, depth/finer_layers, depth/clear_passed, depth/passed_sigmas,
+// depth/passed_miss_probability. Validates what it read; throws std::invalid_argument naming the
 // offending parameter by its key (e.g. "depth/sigma").
 PyramidDepthConfig readPyramidDepthConfig(const ParameterSource& source);
 

@@ -51,6 +51,11 @@ void PyramidDepthConfig::validate() const {
           "PyramidDepthConfig.max_pyramid_levels must be in [1, 24]");
   require(finer_layers >= 0 && finer_layers <= 4,
           "PyramidDepthConfig.finer_layers must be in [0, 4]");
+  require(std::isfinite(passed_sigmas) && passed_sigmas > 0.0,
+          "PyramidDepthConfig.passed_sigmas must be finite and > 0");
+  // Below Eq. 7's own constant 0.3, or it would clear more slowly than the paper.
+  require(passed_miss_probability > 0.0 && passed_miss_probability < 0.3,
+          "PyramidDepthConfig.passed_miss_probability must be in (0, 0.3)");
 }
 
 }  // namespace occupancy_fusion

@@ -14,7 +14,14 @@ namespace occupancy_fusion {
 using depth_detail::require;
 
 PyramidDepthIntegrator::PyramidDepthIntegrator(const PyramidDepthConfig& config)
-    : config_(config), model_(config), table_(model_), inverse_sigma_(1.0 / config.sigma) {}
+    : config_(config),
+      model_(config),
+      table_(model_),
+      inverse_sigma_(1.0 / config.sigma),
+      passed_miss_log_odds_(static_cast<float>(
+          std::log(config.passed_miss_probability / (1.0 - config.passed_miss_probability)))),
+      passed_log_odds_(
+          static_cast<float>(model_.logOdds(-config.passed_sigmas * config.sigma, 0.0))) {}
 
 DepthFrame PyramidDepthIntegrator::prepare(const DepthImageView& depth,
                                            const CameraIntrinsics& camera,
@@ -80,18 +87,27 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   const bool skip_settled =
       (DepthInverseModel::supportSigmas() - model_.freeBeyondSigmas()) * config_.sigma >=
       kMinSlabVoxels * map->resolution();
-  std::vector<int> maybe_settled;
-  std::vector<BlockIndex> settled_blocks;
-  for (int i = 0; i < count && skip_settled; ++i) {
-    if (candidates[i].near < candidates[i].free_front) {
-      maybe_settled.push_back(i);
-      settled_blocks.push_back(candidates[i].index);
+  // With clear_passed the same states tell which voxels are occupied now.
+  const bool clear_passed = config_.clear_passed && config_.method != DepthMethod::kIdeal;
+  const float passed_reach_margin =
+      static_cast<float>((config_.unknown_behind_sigmas + config_.passed_sigmas) * config_.sigma);
+  std::vector<int> read;
+  std::vector<BlockIndex> read_blocks;
+  for (int i = 0; i < count && (skip_settled || clear_passed); ++i) {
+    // With clear_passed every block but those wholly behind the footprint's farthest measurement
+    // less passed_sigmas: a voxel where an object stood lies in front of the cells it reads,
+    // though its footprint may hold nearer surfaces (the floor before it).
+    const CandidateBlock& block = candidates[i];
+    if ((clear_passed && block.near < block.reach - passed_reach_margin) ||
+        (skip_settled && block.near < block.free_front)) {
+      read.push_back(i);
+      read_blocks.push_back(candidates[i].index);
     }
   }
-  const std::vector<VoxelMap::VoxelMask> clamped = map->voxelsAtLowerBound(settled_blocks);
-  std::vector<const VoxelMap::VoxelMask*> clamped_free(count, nullptr);
-  for (std::size_t k = 0; k < maybe_settled.size(); ++k) {
-    if (clamped[k].any()) clamped_free[maybe_settled[k]] = &clamped[k];
+  const std::vector<VoxelMap::VoxelStates> states = map->voxelStates(read_blocks);
+  std::vector<const VoxelMap::VoxelStates*> state_of(count, nullptr);
+  for (std::size_t k = 0; k < read.size(); ++k) {
+    if (states[k].at_lower_bound.any() || states[k].occupied.any()) state_of[read[k]] = &states[k];
   }
   std::vector<int> updated(count, 0);
   int unchanged = 0;
@@ -99,7 +115,7 @@ DepthIntegrationStats PyramidDepthIntegrator::integrate(const DepthImageView& de
   for (int i = 0; i < count; ++i) {
     updated[i] = blockLogOdds(frame, candidates[i], *map,
                               &deltas[static_cast<std::size_t>(i) * VoxelBlock::kVolume],
-                              clamped_free[i], &unchanged);
+                              state_of[i], skip_settled, &unchanged);
   }
 
   DepthIntegrationStats stats;

@@ -344,18 +344,21 @@ Eigen::Vector3d voxelCenter(const VoxelIndex& index, double resolution) {
 
 int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,
                                          const VoxelMap& map, float* deltas,
-                                         const std::bitset<VoxelBlock::kVolume>* clamped_free,
+                                         const VoxelMap::VoxelStates* states, bool skip_settled,
                                          int* unchanged) const {
   std::fill(deltas, deltas + VoxelBlock::kVolume, kNaN);
   int count = 0;
   // A voxel clamped free and nearer than free_front: its update is negative (or none), a no-op.
   const auto settled = [&](int linear, double distance) {
-    if (clamped_free == nullptr || !clamped_free->test(linear) || !(distance < block.free_front)) {
+    if (!skip_settled || states == nullptr || !states->at_lower_bound.test(linear) ||
+        !(distance < block.free_front)) {
       return false;
     }
     ++*unchanged;
     return true;
   };
+  // clear_passed: an occupied voxel the frame sees well in front of the measurements it reads.
+  const bool clear_passed = config_.clear_passed && states != nullptr;
   if (config_.method == DepthMethod::kIdeal) {
     for (int linear = 0; linear < VoxelBlock::kVolume; ++linear) {
       const std::optional<float> delta =
@@ -390,7 +393,11 @@ int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const Candidat
                                                          : pyramidLogOdds(frame, u, v, distance);
           if (std::isnan(delta)) continue;
         }
-        deltas[VoxelBlock::linearIndex(x, y, z)] = delta;
+        const int linear = VoxelBlock::linearIndex(x, y, z);
+        if (clear_passed && delta <= passed_log_odds_ && states->occupied.test(linear)) {
+          delta = passed_miss_log_odds_;
+        }
+        deltas[linear] = delta;
         ++count;
       }
     }

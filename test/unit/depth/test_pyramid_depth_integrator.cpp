@@ -271,6 +271,49 @@ TEST_P(WallTest, SkippingClampedFreeVoxelsLeavesTheMapBitForBit) {
   EXPECT_EQ(mismatches, 0u);
 }
 
+// clear_passed: a wall at 2 m mapped until clamped, then gone (the camera sees a wall at 4 m
+// behind it). Eq. 7's constant logit(0.3) = -0.85 needs ceil(3.51 / 0.85) = 5 frames to bring
+// the clamped voxels to free, the passed miss logit(0.25) = -1.10 ceil(3.51 / 1.10) = 4.
+int framesUntilTheWallLeft(PyramidDepthConfig config, const CameraIntrinsics& camera,
+                           double resolution) {
+  VoxelMapConfig map_config;
+  map_config.resolution = resolution;
+  VoxelMap map(map_config);
+  const PyramidDepthIntegrator integrator(config);
+  const std::vector<float> near_wall(64 * 48, 2.0f), far_wall(64 * 48, 4.0f);
+  for (int i = 0; i < 10; ++i) {
+    integrator.integrate({64, 48, near_wall.data()}, camera, Eigen::Isometry3d::Identity(), &map);
+  }
+  const auto occupied_at_the_wall = [&] {
+    std::size_t count = 0;
+    map.forEachKnownVoxel([&](const VoxelIndex& index, float log_odds) {
+      const double z = map.centerOf(index).z();
+      count += (z > 1.9 && z < 2.1 && log_odds > 0.0f) ? 1 : 0;
+    });
+    return count;
+  };
+  const std::size_t before = occupied_at_the_wall();
+  EXPECT_GT(before, 500u);
+  for (int frames = 1; frames <= 10; ++frames) {
+    integrator.integrate({64, 48, far_wall.data()}, camera, Eigen::Isometry3d::Identity(), &map);
+    if (occupied_at_the_wall() < before / 100) return frames;
+  }
+  return -1;
+}
+
+TEST(PyramidDepthIntegrator, ClearPassedClearsWhatLeftInFourFrames) {
+  for (DepthMethod method : {DepthMethod::kPyramid, DepthMethod::kAndert}) {
+    PyramidDepthConfig config;
+    config.k = 0.05;
+    config.sigma = 0.05;
+    config.method = method;
+    const CameraIntrinsics camera = smallCamera(64, 48, 50.0);
+    EXPECT_EQ(framesUntilTheWallLeft(config, camera, 0.05), 5) << toString(method);
+    config.clear_passed = true;
+    EXPECT_EQ(framesUntilTheWallLeft(config, camera, 0.05), 4) << toString(method);
+  }
+}
+
 TEST_P(WallTest, InvalidPixelsChangeNothing) {
   // 0, NaN and beyond max_range (10 m) everywhere: no block allocated, a prior value untouched.
   std::vector<float> depth(64 * 48, 0.0f);

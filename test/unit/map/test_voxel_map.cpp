@@ -141,24 +141,28 @@ TEST(VoxelMap, UnknownIsNotFreeAndUpdatesAccumulateWithClamping) {
   EXPECT_EQ(map.knownVoxelCount(), 1u);
 }
 
-// The depth mapper's skip of no-op updates reads which voxels sit at the lower clamping bound,
-// dense and sparse (hybrid) blocks alike; absent blocks give an empty mask.
-TEST(VoxelMap, VoxelsAtTheLowerBoundAreMaskedPerBlock) {
+// The depth mapper's skip of no-op updates and its clearing read which voxels sit at the lower
+// clamping bound and which are occupied, dense and sparse (hybrid) blocks alike; absent blocks
+// give empty masks.
+TEST(VoxelMap, VoxelStatesAreMaskedPerBlock) {
   for (BlockStorage storage : {BlockStorage::kDense, BlockStorage::kHybrid}) {
     VoxelMapConfig config = defaultConfig();
     config.block_storage = storage;
     VoxelMap map(config);
     const float miss = map.model().missLogOdds();
-    const VoxelIndex clamped(1, 2, 3), nearly(2, 2, 3), elsewhere(9, 0, 0);
+    const VoxelIndex clamped(1, 2, 3), nearly(2, 2, 3), occupied(3, 2, 3), elsewhere(9, 0, 0);
     for (int i = 0; i < 40; ++i) map.updateVoxel(clamped, miss);
     map.updateVoxel(nearly, miss);
+    map.updateVoxel(occupied, map.model().hitLogOdds());
     for (int i = 0; i < 40; ++i) map.updateVoxel(elsewhere, miss);
-    const std::vector<VoxelMap::VoxelMask> masks =
-        map.voxelsAtLowerBound({VoxelMap::blockOf(clamped), BlockIndex(5, 5, 5)});
-    ASSERT_EQ(masks.size(), 2u);
-    EXPECT_EQ(masks[0].count(), 1u);
-    EXPECT_TRUE(masks[0].test(VoxelMap::linearIndexInBlock(clamped)));
-    EXPECT_TRUE(masks[1].none());
+    const std::vector<VoxelMap::VoxelStates> states =
+        map.voxelStates({VoxelMap::blockOf(clamped), BlockIndex(5, 5, 5)});
+    ASSERT_EQ(states.size(), 2u);
+    EXPECT_EQ(states[0].at_lower_bound.count(), 1u);
+    EXPECT_TRUE(states[0].at_lower_bound.test(VoxelMap::linearIndexInBlock(clamped)));
+    EXPECT_EQ(states[0].occupied.count(), 1u);
+    EXPECT_TRUE(states[0].occupied.test(VoxelMap::linearIndexInBlock(occupied)));
+    EXPECT_TRUE(states[1].at_lower_bound.none() && states[1].occupied.none());
   }
 }
 

@@ -37,6 +37,13 @@ struct PyramidDepthConfig {
   // voxel (docs/depth_method.md, "Grazing incidence"). kPyramid only.
   int finer_layers = 0;
   DepthMethod method = DepthMethod::kPyramid;
+  // Not the paper (default false is): a voxel the map holds occupied whose Eq. 15-17 update is
+  // at most Eq. 7's value passed_sigmas in front of a measurement (the frame sees through it to a
+  // surface behind) takes a miss of passed_miss_probability instead: what has left the view is
+  // cleared in 4 frames instead of 5. Not for kIdeal.
+  bool clear_passed = false;
+  double passed_sigmas = 3.0;             // > 0
+  double passed_miss_probability = 0.25;  // in (0, 0.3)
 
   void validate() const;  // throws std::invalid_argument naming the bad field
 };

@@ -148,16 +148,21 @@ class PyramidDepthIntegrator {
   // update.
   float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
   // Writes all kVolume increments of one block (NaN: no update); returns how many are not NaN.
-  // clamped_free (optional): the voxels the map holds at its lower clamping bound; those nearer
-  // than block.free_front get NaN and are counted in *unchanged instead.
+  // With the map's voxel states (optional): voxels at its lower clamping bound and nearer than
+  // block.free_front get NaN and are counted in *unchanged instead (skip_settled), and with
+  // clear_passed an occupied voxel's update at most passed_log_odds_ becomes the passed miss.
   int blockLogOdds(const DepthFrame& frame, const CandidateBlock& block, const VoxelMap& map,
-                   float* deltas, const std::bitset<VoxelBlock::kVolume>* clamped_free = nullptr,
-                   int* unchanged = nullptr) const;
+                   float* deltas, const VoxelMap::VoxelStates* states = nullptr,
+                   bool skip_settled = false, int* unchanged = nullptr) const;
 
   PyramidDepthConfig config_;
   DepthInverseModel model_;
   OffsetLogOddsTable table_;
   double inverse_sigma_ = 0.0;
+  float passed_miss_log_odds_ = 0.0f;  // clear_passed
+  // Eq. 7 passed_sigmas in front of a measurement, sigma at its smallest: updates at most this
+  // count as the frame seeing through the voxel.
+  float passed_log_odds_ = 0.0f;
 };
 
 }  // namespace occupancy_fusion
