@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "occupancy_fusion/mapping/mapping_session.h"  // placeScan
+#include "submap_spill_file.h"
 
 namespace occupancy_fusion {
 namespace {
@@ -32,6 +33,20 @@ SubmapFusionConfig fusionConfig(const ReanchoringConfig& config, const VoxelMap&
   SubmapFusionConfig fusion = config.fusion;
   if (fusion.spill_folder.empty()) fusion.spill_folder = map.config().spill_folder;
   return fusion;
+}
+
+template <class T>
+void appendValue(std::string* bytes, const T& value) {
+  bytes->append(reinterpret_cast<const char*>(&value), sizeof(value));
+}
+
+template <class T>
+T takeValue(const std::string& bytes, std::size_t* at) {
+  T value{};
+  if (*at + sizeof(value) > bytes.size()) throw std::runtime_error("kept scans: record ends early");
+  std::copy_n(bytes.data() + *at, sizeof(value), reinterpret_cast<char*>(&value));
+  *at += sizeof(value);
+  return value;
 }
 
 }  // namespace
@@ -82,7 +97,10 @@ ReanchoringConfig readReanchoringConfig(const ParameterSource& source) {
     throw std::invalid_argument("reanchoring/max_memory_mb must be >= 0 (0: unbounded), got " +
                                 std::to_string(max_memory_mb));
   }
-  config.fusion.max_memory_bytes = static_cast<std::size_t>(max_memory_mb * 1048576.0);
+  // Three quarters for the submaps' changes, a quarter for the laser scans kept to draw them.
+  const auto bound = static_cast<std::size_t>(max_memory_mb * 1048576.0);
+  config.fusion.max_memory_bytes = bound - bound / 4;
+  config.max_scan_bytes = bound / 4;
   source.get("reanchoring/max_odometry_gap", &config.trajectory.max_odometry_gap);
   config.validate();
   return config;
@@ -126,11 +144,93 @@ void MapReanchoring::keepScan(int submap, const PolarLaserIntegrator& integrator
   last_kept_[index] = {stamp, T_odom_sensor};
   kept_scans_[submap].push_back({index, stamp, T_odom_sensor, scan, max_tilt});
   kept_scan_bytes_ += sizeof(KeptScan) + scan.ranges.size() * sizeof(float);
+  if (config_.max_scan_bytes > 0 && kept_scan_bytes_ > config_.max_scan_bytes) {
+    spillOldScansLocked(submap);
+  }
+}
+
+void MapReanchoring::spillOldScansLocked(int active_submap) {
+  const auto kept_bytes = [](const std::vector<KeptScan>& scans) {
+    std::size_t bytes = 0;
+    for (const KeptScan& scan : scans) {
+      bytes += sizeof(KeptScan) + scan.scan.ranges.size() * sizeof(float);
+    }
+    return bytes;
+  };
+  // The oldest first; the submap being written stays (its scans still grow).
+  for (auto it = kept_scans_.begin();
+       it != kept_scans_.end() && kept_scan_bytes_ > config_.max_scan_bytes;) {
+    if (it->first == active_submap) {
+      ++it;
+      continue;
+    }
+    // With what an earlier spill of this submap holds (a frame leased before the submap closed
+    // may add a scan after).
+    const std::vector<KeptScan> scans = scansOfLocked(it->first);
+    std::string bytes;
+    appendValue(&bytes, static_cast<std::uint64_t>(scans.size()));
+    for (const KeptScan& kept : scans) {
+      appendValue(&bytes, static_cast<std::uint64_t>(kept.integrator));
+      appendValue(&bytes, kept.stamp);
+      for (int i = 0; i < 16; ++i) appendValue(&bytes, kept.T_odom_sensor.matrix().data()[i]);
+      for (double value : {kept.scan.angle_min, kept.scan.angle_increment, kept.scan.range_min,
+                           kept.scan.range_max, kept.max_tilt}) {
+        appendValue(&bytes, value);
+      }
+      appendValue(&bytes, static_cast<std::uint64_t>(kept.scan.ranges.size()));
+      bytes.append(reinterpret_cast<const char*>(kept.scan.ranges.data()),
+                   kept.scan.ranges.size() * sizeof(float));
+    }
+    if (!scan_spill_) scan_spill_ = std::make_unique<SubmapSpillFile>(config_.fusion.spill_folder);
+    spilled_scans_[it->first] = {scan_spill_->append(bytes),
+                                 static_cast<std::uint32_t>(bytes.size())};
+    kept_scan_bytes_ -= kept_bytes(it->second);
+    it = kept_scans_.erase(it);
+  }
+}
+
+std::vector<MapReanchoring::KeptScan> MapReanchoring::scansOfLocked(int submap) const {
+  std::vector<KeptScan> scans = spilledScansLocked(submap);
+  const auto kept = kept_scans_.find(submap);
+  if (kept != kept_scans_.end())
+    scans.insert(scans.end(), kept->second.begin(), kept->second.end());
+  return scans;
+}
+
+std::vector<MapReanchoring::KeptScan> MapReanchoring::spilledScansLocked(int submap) const {
+  const auto spilled = spilled_scans_.find(submap);
+  if (spilled == spilled_scans_.end()) return {};
+  std::string bytes;
+  scan_spill_->read(spilled->second.first, spilled->second.second, &bytes);
+  std::size_t at = 0;
+  std::vector<KeptScan> scans(takeValue<std::uint64_t>(bytes, &at));
+  for (KeptScan& kept : scans) {
+    kept.integrator = takeValue<std::uint64_t>(bytes, &at);
+    kept.stamp = takeValue<double>(bytes, &at);
+    for (int i = 0; i < 16; ++i)
+      kept.T_odom_sensor.matrix().data()[i] = takeValue<double>(bytes, &at);
+    kept.scan.angle_min = takeValue<double>(bytes, &at);
+    kept.scan.angle_increment = takeValue<double>(bytes, &at);
+    kept.scan.range_min = takeValue<double>(bytes, &at);
+    kept.scan.range_max = takeValue<double>(bytes, &at);
+    kept.max_tilt = takeValue<double>(bytes, &at);
+    kept.scan.ranges.resize(takeValue<std::uint64_t>(bytes, &at));
+    const std::size_t size = kept.scan.ranges.size() * sizeof(float);
+    if (at + size > bytes.size()) throw std::runtime_error("kept scans: record ends early");
+    std::copy_n(bytes.data() + at, size, reinterpret_cast<char*>(kept.scan.ranges.data()));
+    at += size;
+  }
+  return scans;
 }
 
 std::size_t MapReanchoring::keptScanBytes() const {
   std::lock_guard<std::mutex> lock(scans_mutex_);
   return kept_scan_bytes_;
+}
+
+std::size_t MapReanchoring::spilledScanBytes() const {
+  std::lock_guard<std::mutex> lock(scans_mutex_);
+  return scan_spill_ ? scan_spill_->bytes() : 0;
 }
 
 bool MapReanchoring::draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) {
@@ -143,9 +243,8 @@ bool MapReanchoring::draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer
   std::vector<PolarLaserIntegratorConfig> configs;
   {
     std::lock_guard<std::mutex> lock(scans_mutex_);
-    const auto kept = kept_scans_.find(id);
-    if (kept == kept_scans_.end() || kept->second.empty()) return false;
-    scans = kept->second;
+    scans = scansOfLocked(id);  // from memory or read back from the spill file
+    if (scans.empty()) return false;
     for (const auto& integrator : integrators_) configs.push_back(integrator.second->config());
   }
   // Several submaps are drawn at once, each thread with integrators of its own (an integrator
@@ -386,6 +485,7 @@ void MapReanchoring::restore(std::istream& in) {
     std::lock_guard<std::mutex> scans(scans_mutex_);
     kept_scans_.clear();
     kept_scan_bytes_ = 0;
+    spilled_scans_.clear();
   }
   fusion_.restore(in);
   std::vector<StampedPose> odometry = readPoses(in), map_to_odom = readPoses(in);
@@ -407,6 +507,8 @@ void MapReanchoring::reset() {
   std::lock_guard<std::mutex> scans(scans_mutex_);
   kept_scans_.clear();
   kept_scan_bytes_ = 0;
+  spilled_scans_.clear();
+  scan_spill_.reset();
   for (auto& last : last_kept_) last.first = -INFINITY;
   statistics_ = ReanchoringStatistics();
 }

@@ -396,6 +396,8 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
     status.add("submaps", reanchoring->fusion().submaps().size());
     status.add("submaps memory bytes",
                reanchoring->fusion().memoryBytes() + reanchoring->keptScanBytes());
+    status.add("submaps spilled bytes (max_memory_mb)",
+               reanchoring->fusion().spilledBytes() + reanchoring->spilledScanBytes());
     status.add("corrections applied", corrections.corrections);
     status.add("submaps moved", corrections.submaps_moved);
     status.add("slowest correction, map moved (ms)", 1e3 * corrections.slowest_move_seconds);

@@ -39,6 +39,8 @@
 
 namespace occupancy_fusion {
 
+class SubmapSpillFile;  // mapping/submap_spill_file.h
+
 struct ReanchoringConfig {
   enum class Source { kNone, kTf, kPath };
   // reanchoring/source: "none" (frames placed by map -> sensor; the map never moves), "tf" or
@@ -54,6 +56,10 @@ struct ReanchoringConfig {
   // oldest go to a temporary file beside the map's spill_folder, or the system's temporary folder)
   SubmapFusionConfig fusion;
   TrajectoryCorrectionConfig trajectory;  // reanchoring/max_odometry_gap
+  // The laser scans kept to draw moved submaps again, in memory at most (0: unbounded); the
+  // oldest submaps' go to a temporary file beyond it. reanchoring/max_memory_mb splits between
+  // the submaps' changes (fusion.max_memory_bytes, three quarters) and these (a quarter).
+  std::size_t max_scan_bytes = 0;
 
   bool enabled() const { return source != Source::kNone; }
   void validate() const;  // throws std::invalid_argument naming the bad field
@@ -105,7 +111,8 @@ class MapReanchoring : private LayerDrawer {
   // last kept one of its integrator was (within 5 cm and 3 deg, 1 s) is not kept again.
   void keepScan(int submap, const PolarLaserIntegrator& integrator, double stamp,
                 const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan, double max_tilt);
-  std::size_t keptScanBytes() const;
+  std::size_t keptScanBytes() const;     // in memory
+  std::size_t spilledScanBytes() const;  // in the temporary file
 
   // The SLAM system's keyframes (T_map_base of base_frame), the whole optimised path.
   SubmapMoveResult applyPath(const std::vector<StampedPose>& path, double stamp = 0.0);
@@ -163,6 +170,12 @@ class MapReanchoring : private LayerDrawer {
   mutable std::mutex scans_mutex_;
   std::map<int, std::vector<KeptScan>> kept_scans_;  // by submap
   std::size_t kept_scan_bytes_ = 0;
+  // Under max_scan_bytes the oldest submaps' scans, by submap: offset and size in scan_spill_.
+  std::map<int, std::pair<std::uint64_t, std::uint32_t>> spilled_scans_;
+  std::unique_ptr<SubmapSpillFile> scan_spill_;
+  void spillOldScansLocked(int active_submap);
+  std::vector<KeptScan> scansOfLocked(int submap) const;  // spilled, then in memory
+  std::vector<KeptScan> spilledScansLocked(int submap) const;
   // Copies of the sessions' integrators, by the session's one they copy.
   std::vector<std::pair<const PolarLaserIntegrator*, std::unique_ptr<PolarLaserIntegrator>>>
       integrators_;

@@ -292,6 +292,7 @@ TEST_F(MapReanchoringDrive, APathOfEveryTruePoseDrawsTheTrueLaserLayer) {
 TEST_F(MapReanchoringDrive, SpilledSubmapsMoveAsThoseInMemory) {
   MappingSessionConfig bounded_config = sessionConfig(ReanchoringConfig::Source::kPath);
   bounded_config.reanchoring.fusion.max_memory_bytes = 1;
+  bounded_config.reanchoring.max_scan_bytes = 1;  // the laser scans kept to draw submaps again
   MappingSession unbounded(sessionConfig(ReanchoringConfig::Source::kPath), &poses(), nullptr);
   MappingSession bounded(bounded_config, &poses(), nullptr);
   std::vector<StampedPose> path;
@@ -320,6 +321,11 @@ TEST_F(MapReanchoringDrive, SpilledSubmapsMoveAsThoseInMemory) {
   // Measured: 64 KB against 165 KB (the newest submap, the active one and where each spilled
   // block lies stay in memory).
   EXPECT_LT(spilled.memoryBytes(), unbounded.reanchoring()->fusion().memoryBytes() / 2);
+  // The kept scans too: all but the submap being written's in the file, read back to draw the
+  // moved submaps' laser cells again (the same cells as above).
+  EXPECT_GT(unbounded.reanchoring()->keptScanBytes(), 0u);
+  EXPECT_GT(bounded.reanchoring()->spilledScanBytes(), 0u);
+  EXPECT_LT(bounded.reanchoring()->keptScanBytes(), unbounded.reanchoring()->keptScanBytes() / 2);
   // Saved, the same submaps (in another order of blocks): restored, they move the same.
   std::ostringstream bounded_bytes, unbounded_bytes;
   bounded.reanchoring()->save(bounded_bytes);
