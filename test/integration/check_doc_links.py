@@ -17,7 +17,6 @@ catkin's test_results folder, where scripts/count_test_results.py counts it): on
 page, failing with that page's broken links, and one that fails when the extraction no longer
 finds a link known to exist.
 """
-import argparse
 import pathlib
 import re
 import sys
@@ -196,11 +195,7 @@ def write_junit(path, results, extraction_problems):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("root", nargs="?", default=".", help="package root")
-    parser.add_argument("--junit", help="also write the result as JUnit XML to this file")
-    arguments = parser.parse_args()
-    root = pathlib.Path(arguments.root).resolve()
+    root, junit = junit_report.check_arguments(__doc__)
     resolver = Resolver(root)
     results = []  # (page, [(line, target, why)])
     total = checked = 0
@@ -228,8 +223,8 @@ def main():
     broken_count = sum(len(broken) for _, broken in results)
     print(f"{len(results)} pages, {total} links, {checked} relative links checked, "
           f"{broken_count} broken")
-    if arguments.junit:
-        write_junit(arguments.junit, results, extraction_problems)
+    if junit:
+        write_junit(junit, results, extraction_problems)
     return 1 if broken_count or extraction_problems else 0
 
 

@@ -16,7 +16,6 @@ test_results folder, where scripts/count_test_results.py counts it): one test ca
 file that reads parameters, failing with that file's undocumented keys, and one that fails when
 the extraction no longer finds the keys known to exist.
 """
-import argparse
 import pathlib
 import re
 import sys
@@ -106,11 +105,7 @@ def write_junit(path, keys, missing, extraction_missing):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("root", nargs="?", default=".", help="package root")
-    parser.add_argument("--junit", help="also write the result as JUnit XML to this file")
-    arguments = parser.parse_args()
-    root = pathlib.Path(arguments.root).resolve()
+    root, junit = junit_report.check_arguments(__doc__)
     keys = keys_read(root)
     paths = documented_paths(root)
     # The extraction must find the parameters we know exist, or it has silently broken.
@@ -122,8 +117,8 @@ def main():
     for key in missing:
         source, line = keys[key][0]
         print(f"undocumented: {key} (read at {source}:{line})")
-    if arguments.junit:
-        write_junit(arguments.junit, keys, set(missing), extraction_missing)
+    if junit:
+        write_junit(junit, keys, set(missing), extraction_missing)
     return 1 if missing or extraction_missing else 0
 
 

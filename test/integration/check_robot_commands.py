@@ -39,7 +39,6 @@ into catkin's test_results folder, where scripts/count_test_results.py counts it
 per command, one per roslaunch --dump-params check (skipped without roslaunch), and one that fails
 when the extraction finds no roslaunch line.
 """
-import argparse
 import glob
 import importlib.util
 import os
@@ -549,11 +548,7 @@ def write_junit(path, commands, roslaunch, extraction_problems):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("root", nargs="?", default=".", help="package root")
-    parser.add_argument("--junit", help="also write the result as JUnit XML to this file")
-    arguments = parser.parse_args()
-    root = pathlib.Path(arguments.root).resolve()
+    root, junit = junit_report.check_arguments(__doc__)
     roslaunch = shutil.which("roslaunch")
     commands = check_page(root, roslaunch)
     failed = 0
@@ -576,8 +571,8 @@ def main():
     for problem in extraction_problems:
         print(f"extraction broken: {problem}")
     print(f"{len(commands)} commands ({launches} roslaunch), {failed} failed")
-    if arguments.junit:
-        write_junit(arguments.junit, commands, roslaunch, extraction_problems)
+    if junit:
+        write_junit(junit, commands, roslaunch, extraction_problems)
     return 1 if failed or extraction_problems else 0
 
 

@@ -1,10 +1,21 @@
-"""JUnit XML for the integration checks, in the form scripts/count_test_results.py counts.
+"""What the integration checks share: their command line, and JUnit XML in the form
+scripts/count_test_results.py counts.
 
+check_arguments(doc): the package root (resolved) and the --junit file (or None).
 write_suite(path, suite_name, cases): cases are (name, problems, skipped) with problems a list
 of strings (a failure when not empty) and skipped a reason or None.
 """
+import argparse
 import pathlib
 import xml.etree.ElementTree as ElementTree
+
+
+def check_arguments(doc):
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("root", nargs="?", default=".", help="package root")
+    parser.add_argument("--junit", help="also write the result as JUnit XML to this file")
+    arguments = parser.parse_args()
+    return pathlib.Path(arguments.root).resolve(), arguments.junit
 
 
 def write_suite(path, suite_name, cases, problem_word="problems"):
