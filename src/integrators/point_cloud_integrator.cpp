@@ -262,24 +262,6 @@ IntegrationStats PointCloudIntegrator::computeUpdate(
   return stats;
 }
 
-void PointCloudIntegrator::apply(const VoxelUpdateSet& update, float hit_log_odds,
-                                 float miss_log_odds, VoxelMap* map) {
-  const float min_log_odds = map->minLogOdds();
-  const float max_log_odds = map->maxLogOdds();
-  map->updateBlocks(update.blocks(), [&](const BlockIndex& block_index, VoxelBlock& block) {
-    const VoxelUpdateSet::BlockMasks* masks = update.find(block_index);
-    for (int w = 0; w < VoxelUpdateSet::kWords; ++w) {
-      const std::uint64_t occupied = masks->occupied[w];
-      for (std::uint64_t bits = occupied; bits != 0; bits &= bits - 1) {
-        block.update(64 * w + __builtin_ctzll(bits), hit_log_odds, min_log_odds, max_log_odds);
-      }
-      for (std::uint64_t bits = masks->free[w] & ~occupied; bits != 0; bits &= bits - 1) {
-        block.update(64 * w + __builtin_ctzll(bits), miss_log_odds, min_log_odds, max_log_odds);
-      }
-    }
-  });
-}
-
 namespace {
 
 // Whether a voxel of the update within `margin` voxels of `voxel` (on each axis) is an end voxel.
@@ -296,8 +278,7 @@ bool nearEndVoxel(const VoxelUpdateSet& update, const VoxelIndex& voxel, int mar
 
 }  // namespace
 
-std::size_t PointCloudIntegrator::applyClearingPassed(const VoxelUpdateSet& update,
-                                                      VoxelMap* map) const {
+std::size_t PointCloudIntegrator::apply(const VoxelUpdateSet& update, VoxelMap* map) const {
   const OccupancyModel& model = map->model();
   const float hit = model.hitLogOdds();
   const float miss = model.missLogOdds();
@@ -317,9 +298,9 @@ std::size_t PointCloudIntegrator::applyClearingPassed(const VoxelUpdateSet& upda
       }
       for (std::uint64_t bits = masks->free[w] & ~occupied; bits != 0; bits &= bits - 1) {
         const int linear = 64 * w + __builtin_ctzll(bits);
-        // Occupied now, passed by a ray, and no ray ends near it: it has left.
+        // clear_passed: occupied now, passed by a ray, and no ray ends near it: it has left.
         const bool cleared =
-            block.log_odds[linear] > threshold &&
+            config_.clear_passed && block.log_odds[linear] > threshold &&
             !nearEndVoxel(update, block_index * VoxelBlock::kSide + VoxelBlock::localIndex(linear),
                           config_.passed_margin);
         passed_here += cleared ? 1 : 0;
@@ -340,11 +321,7 @@ IntegrationStats PointCloudIntegrator::integrate(const std::vector<Eigen::Vector
       computeUpdate(points_in_map, sensor_origin_in_map, map->resolution(), &update);
   if (stats.rays > 0) {
     map->setFocus(sensor_origin_in_map);
-    if (config_.clear_passed) {
-      stats.passed_voxels = applyClearingPassed(update, map);
-    } else {
-      apply(update, map->model().hitLogOdds(), map->model().missLogOdds(), map);
-    }
+    stats.passed_voxels = apply(update, map);
   }
   stats.free_voxels = update.freeCount();
   stats.occupied_voxels = update.occupiedCount();

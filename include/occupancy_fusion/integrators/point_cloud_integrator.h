@@ -206,13 +206,10 @@ class PointCloudIntegrator {
   IntegrationStats integrate(const std::vector<Eigen::Vector3f>& points_in_map,
                              const Eigen::Vector3d& sensor_origin_in_map, VoxelMap* map) const;
 
-  // Applies an update set: hit_log_odds to occupied voxels, miss_log_odds to the other marked
-  // ones, in one VoxelMap::updateBlocks call.
-  static void apply(const VoxelUpdateSet& update, float hit_log_odds, float miss_log_odds,
-                    VoxelMap* map);
-  // apply, with clear_passed's miss for the marked-free voxels the map holds occupied and no end
-  // voxel of the update lies near; returns how many took it.
-  std::size_t applyClearingPassed(const VoxelUpdateSet& update, VoxelMap* map) const;
+  // Applies an update set in one VoxelMap::updateBlocks call: the map's hit to occupied voxels,
+  // its miss to the other marked ones, or with clear_passed the passed miss to those the map
+  // holds occupied with no end voxel of the update near; returns how many took that.
+  std::size_t apply(const VoxelUpdateSet& update, VoxelMap* map) const;
 
  private:
   PointCloudIntegratorConfig config_;
