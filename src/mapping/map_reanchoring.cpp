@@ -143,20 +143,13 @@ void MapReanchoring::keepScan(int submap, const PolarLaserIntegrator& integrator
   }
   last_kept_[index] = {stamp, T_odom_sensor};
   kept_scans_[submap].push_back({index, stamp, T_odom_sensor, scan, max_tilt});
-  kept_scan_bytes_ += sizeof(KeptScan) + scan.ranges.size() * sizeof(float);
+  kept_scan_bytes_ += kept_scans_[submap].back().bytes();
   if (config_.max_scan_bytes > 0 && kept_scan_bytes_ > config_.max_scan_bytes) {
     spillOldScansLocked(submap);
   }
 }
 
 void MapReanchoring::spillOldScansLocked(int active_submap) {
-  const auto kept_bytes = [](const std::vector<KeptScan>& scans) {
-    std::size_t bytes = 0;
-    for (const KeptScan& scan : scans) {
-      bytes += sizeof(KeptScan) + scan.scan.ranges.size() * sizeof(float);
-    }
-    return bytes;
-  };
   // The oldest first; the submap being written stays (its scans still grow).
   for (auto it = kept_scans_.begin();
        it != kept_scans_.end() && kept_scan_bytes_ > config_.max_scan_bytes;) {
@@ -184,7 +177,7 @@ void MapReanchoring::spillOldScansLocked(int active_submap) {
     if (!scan_spill_) scan_spill_ = std::make_unique<SubmapSpillFile>(config_.fusion.spill_folder);
     spilled_scans_[it->first] = {scan_spill_->append(bytes),
                                  static_cast<std::uint32_t>(bytes.size())};
-    kept_scan_bytes_ -= kept_bytes(it->second);
+    for (const KeptScan& kept : it->second) kept_scan_bytes_ -= kept.bytes();
     it = kept_scans_.erase(it);
   }
 }

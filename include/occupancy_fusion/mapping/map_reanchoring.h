@@ -160,6 +160,7 @@ class MapReanchoring : private LayerDrawer {
     Eigen::Isometry3d T_odom_sensor;
     LaserScan scan;
     double max_tilt = 0.0;
+    std::size_t bytes() const { return sizeof(KeptScan) + scan.ranges.size() * sizeof(float); }
   };
 
   ReanchoringConfig config_;
