@@ -69,6 +69,9 @@ void ReanchoringConfig::validate() const {
   }
   requirePositive(submap_distance, "reanchoring/submap_distance (m)", false);
   requirePositive(submap_seconds, "reanchoring/submap_seconds (s, 0: no limit)", true);
+  requirePositive(keep_scan_distance, "ReanchoringConfig.keep_scan_distance (m)", true);
+  requirePositive(keep_scan_angle, "ReanchoringConfig.keep_scan_angle (rad)", true);
+  requirePositive(keep_scan_seconds, "ReanchoringConfig.keep_scan_seconds (s)", true);
   fusion.validate();
   trajectory.validate();
 }
@@ -122,7 +125,8 @@ MapReanchoring::~MapReanchoring() {
   fusion_.setLayerDrawer(nullptr);
 }
 
-void MapReanchoring::keepScan(int submap, const PolarLaserIntegrator& integrator, double stamp,
+void MapReanchoring::keepScan(int submap, const std::string& sensor,
+                              const PolarLaserIntegrator& integrator, double stamp,
                               const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan,
                               double max_tilt) {
   std::lock_guard<std::mutex> lock(scans_mutex_);
@@ -131,22 +135,35 @@ void MapReanchoring::keepScan(int submap, const PolarLaserIntegrator& integrator
   if (index == integrators_.size()) {
     integrators_.emplace_back(&integrator,
                               std::make_unique<PolarLaserIntegrator>(integrator.config()));
-    last_kept_.emplace_back(-INFINITY, Eigen::Isometry3d::Identity());
-  } else {
-    // Where the last one was: the scan adds nothing a redraw needs.
-    const auto& [last_stamp, last_pose] = last_kept_[index];
-    const Eigen::Isometry3d step = last_pose.inverse() * T_odom_sensor;
-    if (std::abs(stamp - last_stamp) < 1.0 && step.translation().norm() < 0.05 &&
-        Eigen::AngleAxisd(step.linear()).angle() < 0.05) {
+  }
+  if (KeptScan* last = lastKeptLocked(sensor, submap)) {
+    // Taken about where the last one kept was: it counts once more there instead.
+    const Eigen::Isometry3d step = last->T_odom_sensor.inverse() * T_odom_sensor;
+    if (std::abs(stamp - last->stamp) < config_.keep_scan_seconds &&
+        step.translation().norm() < config_.keep_scan_distance &&
+        Eigen::AngleAxisd(step.linear()).angle() < config_.keep_scan_angle) {
+      last->weight += 1.0f;
       return;
     }
   }
-  last_kept_[index] = {stamp, T_odom_sensor};
-  kept_scans_[submap].push_back({index, stamp, T_odom_sensor, scan, max_tilt});
-  kept_scan_bytes_ += kept_scans_[submap].back().bytes();
+  std::vector<KeptScan>& kept = kept_scans_[submap];
+  last_kept_[sensor] = {submap, kept.size()};
+  kept.push_back({index, stamp, T_odom_sensor, scan, max_tilt});
+  kept_scan_bytes_ += kept.back().bytes();
   if (config_.max_scan_bytes > 0 && kept_scan_bytes_ > config_.max_scan_bytes) {
     spillOldScansLocked(submap);
   }
+}
+
+MapReanchoring::KeptScan* MapReanchoring::lastKeptLocked(const std::string& sensor, int submap) {
+  // Only one of the same submap still in memory (a spilled record is not written again).
+  const auto found = last_kept_.find(sensor);
+  if (found == last_kept_.end()) return nullptr;
+  const LastKept& last = found->second;
+  if (last.submap != submap) return nullptr;
+  const auto kept = kept_scans_.find(submap);
+  if (kept == kept_scans_.end() || last.index >= kept->second.size()) return nullptr;
+  return &kept->second[last.index];
 }
 
 void MapReanchoring::spillOldScansLocked(int active_submap) {
@@ -170,6 +187,7 @@ void MapReanchoring::spillOldScansLocked(int active_submap) {
                            kept.scan.range_max, kept.max_tilt}) {
         appendValue(&bytes, value);
       }
+      appendValue(&bytes, kept.weight);
       appendValue(&bytes, static_cast<std::uint64_t>(kept.scan.ranges.size()));
       bytes.append(reinterpret_cast<const char*>(kept.scan.ranges.data()),
                    kept.scan.ranges.size() * sizeof(float));
@@ -178,6 +196,9 @@ void MapReanchoring::spillOldScansLocked(int active_submap) {
     spilled_scans_[it->first] = {scan_spill_->append(bytes),
                                  static_cast<std::uint32_t>(bytes.size())};
     for (const KeptScan& kept : it->second) kept_scan_bytes_ -= kept.bytes();
+    for (auto& [sensor, last] : last_kept_) {
+      if (last.submap == it->first) last = LastKept();  // a late scan starts a record anew
+    }
     it = kept_scans_.erase(it);
   }
 }
@@ -207,6 +228,7 @@ std::vector<MapReanchoring::KeptScan> MapReanchoring::spilledScansLocked(int sub
     kept.scan.range_min = takeValue<double>(bytes, &at);
     kept.scan.range_max = takeValue<double>(bytes, &at);
     kept.max_tilt = takeValue<double>(bytes, &at);
+    kept.weight = takeValue<float>(bytes, &at);
     kept.scan.ranges.resize(takeValue<std::uint64_t>(bytes, &at));
     const std::size_t size = kept.scan.ranges.size() * sizeof(float);
     if (at + size > bytes.size()) throw std::runtime_error("kept scans: record ends early");
@@ -253,7 +275,7 @@ bool MapReanchoring::draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer
         correctionAt(corrections, scan.stamp).value_or(T_map_odom) * scan.T_odom_sensor;
     try {
       const PlacedScan placed = placeScan(scan.scan, T_map_sensor, scan.max_tilt);
-      integrator->integrateIntoLayer(placed.scan, placed.sensor, layer);
+      integrator->integrateIntoLayer(placed.scan, placed.sensor, layer, scan.weight);
     } catch (const std::invalid_argument&) {
       // Tilted beyond max_tilt at the corrected pose: left out, as a frame would be.
     }
@@ -502,7 +524,7 @@ void MapReanchoring::reset() {
   kept_scan_bytes_ = 0;
   spilled_scans_.clear();
   scan_spill_.reset();
-  for (auto& last : last_kept_) last.first = -INFINITY;
+  last_kept_.clear();
   statistics_ = ReanchoringStatistics();
 }
 

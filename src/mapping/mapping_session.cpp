@@ -207,7 +207,7 @@ FrameOutcome MappingSession::integrate(const LaserScanFrame& frame) {
                                                laser_source - &config_.laser_sources[0])];
   integrator.integrateIntoLayer(placed.scan, placed.sensor, layer_);
   if (lease) {  // kept to draw its cells anew when its submap moves
-    reanchoring_->keepScan(lease->lease.submap(), integrator, frame.header.stamp,
+    reanchoring_->keepScan(lease->lease.submap(), sensor_frame, integrator, frame.header.stamp,
                            lease->T_odom_sensor, frame.scan, maxTiltOf(frame.header));
   }
   return integrated(frame.header, frame.scan.ranges.size(), start);

@@ -60,6 +60,13 @@ struct ReanchoringConfig {
   // oldest submaps' go to a temporary file beyond it. reanchoring/max_memory_mb splits between
   // the submaps' changes (fusion.max_memory_bytes, three quarters) and these (a quarter).
   std::size_t max_scan_bytes = 0;
+  // A laser scan taken within these (m, rad, s) of the last one kept of its laser in the same
+  // submap is not kept: that one is drawn with a weight one greater. A standing robot keeps a
+  // scan a second. Farther apart, scans differ where a weighted one would not stand for them
+  // (thinned to one kept scan every 0.3 m, the 60 x 40 m floor's laser IoU fell 0.94 -> 0.90).
+  double keep_scan_distance = 0.05;
+  double keep_scan_angle = 0.05;
+  double keep_scan_seconds = 1.0;
 
   bool enabled() const { return source != Source::kNone; }
   void validate() const;  // throws std::invalid_argument naming the bad field
@@ -107,10 +114,12 @@ class MapReanchoring : private LayerDrawer {
   // A laser scan integrated into submap `submap`'s part of the layer, kept so that the submap's
   // cells can be drawn anew, each scan at its own correction, when the submap moves (instead of
   // re-sampled: thin walls then land where a map made with the corrected poses has them).
-  // `integrator`: the session's, whose settings a copy of its own uses. A scan taken where the
-  // last kept one of its integrator was (within 5 cm and 3 deg, 1 s) is not kept again.
-  void keepScan(int submap, const PolarLaserIntegrator& integrator, double stamp,
-                const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan, double max_tilt);
+  // `integrator`: the session's, whose settings a copy of its own uses. A scan of `sensor` taken
+  // about where its last kept one of the same submap was (config's keep_scan_*) is not kept: that
+  // one is drawn with a weight one greater.
+  void keepScan(int submap, const std::string& sensor, const PolarLaserIntegrator& integrator,
+                double stamp, const Eigen::Isometry3d& T_odom_sensor, const LaserScan& scan,
+                double max_tilt);
   std::size_t keptScanBytes() const;     // in memory
   std::size_t spilledScanBytes() const;  // in the temporary file
 
@@ -160,6 +169,7 @@ class MapReanchoring : private LayerDrawer {
     Eigen::Isometry3d T_odom_sensor;
     LaserScan scan;
     double max_tilt = 0.0;
+    float weight = 1.0f;  // the scans it stands for: itself and those taken about where it was
     std::size_t bytes() const { return sizeof(KeptScan) + scan.ranges.size() * sizeof(float); }
   };
 
@@ -175,13 +185,18 @@ class MapReanchoring : private LayerDrawer {
   std::map<int, std::pair<std::uint64_t, std::uint32_t>> spilled_scans_;
   std::unique_ptr<SubmapSpillFile> scan_spill_;
   void spillOldScansLocked(int active_submap);
+  KeptScan* lastKeptLocked(const std::string& sensor, int submap);
   std::vector<KeptScan> scansOfLocked(int submap) const;  // spilled, then in memory
   std::vector<KeptScan> spilledScansLocked(int submap) const;
   // Copies of the sessions' integrators, by the session's one they copy.
   std::vector<std::pair<const PolarLaserIntegrator*, std::unique_ptr<PolarLaserIntegrator>>>
       integrators_;
-  // Per integrator, the stamp and pose of the last scan kept.
-  std::vector<std::pair<double, Eigen::Isometry3d>> last_kept_;
+  // By sensor frame, the last scan kept: its submap and its index there.
+  struct LastKept {
+    int submap = -1;
+    std::size_t index = 0;
+  };
+  std::map<std::string, LastKept> last_kept_;
   // The corrections of the last path or tf's jumps: where each kept scan is drawn.
   std::vector<StampedPose> corrections_;
   mutable std::mutex mutex_;  // the odometry, the submap's start and the statistics

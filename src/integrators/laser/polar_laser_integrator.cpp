@@ -82,10 +82,13 @@ LogOddsRaster rasterAround(const PolarField& field, const Pose2D& sensor, double
 }
 
 void PolarLaserIntegrator::integrateIntoLayer(const LaserScan& scan, const Pose2D& sensor,
-                                              GridLayer2D* layer) {
+                                              GridLayer2D* layer, float weight) {
   buildPolarField(scan, config_.model, &field_);
   LogOddsRaster raster = rasterAround(field_, sensor, layer->resolution());
   project(field_, sensor, config_.method, &raster);
+  if (weight != 1.0f) {
+    for (float& value : raster.data) value *= weight;  // NaN (no information) stays NaN
+  }
   layer->addRaster(raster.origin_cell, raster.width, raster.height, raster.data.data());
 }
 

@@ -453,5 +453,55 @@ TEST_F(MapReanchoringDrive, WithoutCorrectionsTheMapIsTodaysVoxelForVoxel) {
   EXPECT_GT(reanchored.reanchoring()->fusion().submaps().size(), 3u);
 }
 
+// A robot standing for 0.9 s with a front and a rear laser at 10 Hz: each laser's first scan is
+// kept, standing for the nine taken there (one integrator draws both lasers: a scan is compared
+// with the last one of its own laser). A correction then draws them again, each with weight 9:
+// the laser layer is the one the 18 scans make at the corrected pose.
+TEST(MapReanchoringScans, AStandingRobotKeepsOneScanPerLaserDrawnForAllItsScans) {
+  const Eigen::Isometry3d rear_laser =
+      Eigen::Translation3d(-0.2, 0.0, 0.3) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ());
+  struct Standing : PoseSource {
+    Eigen::Isometry3d rear;
+    std::optional<Eigen::Isometry3d> lookup(const std::string& /*target*/, const std::string& frame,
+                                            double /*stamp*/, std::string* /*why*/) const override {
+      if (frame == "laser") return kBaseLaser;
+      if (frame == "laser_rear") return rear;
+      return Eigen::Isometry3d::Identity();  // base_link in odom (and odom in map)
+    }
+  } standing;
+  standing.rear = rear_laser;
+  const sim::Scene scene = sim::makeRoomScene();
+  const Eigen::Isometry3d T_map_base = planar(0.3, -0.2, 0.0);  // the correction
+  MappingSession session(sessionConfig(ReanchoringConfig::Source::kPath), &standing, nullptr);
+  MappingSession corrected(sessionConfig(ReanchoringConfig::Source::kNone), nullptr, nullptr);
+  std::size_t beams = 0;
+  for (int k = 0; k < 9; ++k) {
+    for (const auto& [frame, mount] :
+         {std::pair<std::string, Eigen::Isometry3d>{"laser", kBaseLaser},
+          {"laser_rear", rear_laser}}) {
+      LaserScanFrame scan;
+      scan.header = {"laser", "/" + frame, frame, kStamp0 + 0.1 * k, std::nullopt};
+      scan.scan = toLaserScan(sim::renderScan(scene, sim::LaserScanner(), T_map_base * mount));
+      beams = scan.scan.ranges.size();
+      ASSERT_TRUE(session.integrate(scan).integrated);
+      scan.header.T_map_sensor = T_map_base * mount;
+      ASSERT_TRUE(corrected.integrate(scan).integrated);
+    }
+  }
+  // Two scans kept, not 18.
+  EXPECT_LT(session.reanchoring()->keptScanBytes(), 2 * (beams * sizeof(float) + 1024));
+  session.onPath({{kStamp0, T_map_base}, {kStamp0 + 0.8, T_map_base}}, kStamp0 + 0.8);
+  ASSERT_EQ(session.reanchoring()->statistics().corrections, 1u);
+  std::size_t cells = 0, close = 0;
+  corrected.laserLayer().forEachKnownCell([&](const CellIndex& index, float value) {
+    ++cells;
+    const std::optional<float> drawn = session.laserLayer().logOdds(index);
+    close += drawn && std::abs(*drawn - value) < 0.01f ? 1 : 0;
+  });
+  ASSERT_GT(cells, 1000u);
+  EXPECT_GT(static_cast<double>(close) / static_cast<double>(cells), 0.99);
+  EXPECT_GT(layerIoU(session.laserLayer(), corrected.laserLayer()), 0.99);
+}
+
 }  // namespace
 }  // namespace occupancy_fusion

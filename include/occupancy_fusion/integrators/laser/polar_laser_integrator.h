@@ -52,7 +52,9 @@ class PolarLaserIntegrator {
   // there) over the cells its observed beams can reach. `sensor` is the
   // scanner's pose in the layer's frame. With the exact method a moving sensor
   // costs one overlay computation per new pose.
-  void integrateIntoLayer(const LaserScan& scan, const Pose2D& sensor, GridLayer2D* layer);
+  // `weight` scales the scan's log-ratios: a scan standing for several taken from about its pose.
+  void integrateIntoLayer(const LaserScan& scan, const Pose2D& sensor, GridLayer2D* layer,
+                          float weight = 1.0f);
 
  private:
   PolarLaserIntegratorConfig config_;
