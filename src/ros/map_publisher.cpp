@@ -112,6 +112,10 @@ void MapPublisherConfig::validate() const {
     throw std::invalid_argument("publish_rate must be a positive number of Hz, got " +
                                 std::to_string(publish_rate));
   }
+  if (!(projected_map_rate >= 0.0) || !std::isfinite(projected_map_rate)) {
+    throw std::invalid_argument("projected_map_rate must be >= 0 Hz (0: at publish_rate), got " +
+                                std::to_string(projected_map_rate));
+  }
   if (save_prefix.empty()) throw std::invalid_argument("save_prefix must not be empty");
   grid.validate();
 }
@@ -119,6 +123,7 @@ void MapPublisherConfig::validate() const {
 MapPublisherConfig readMapPublisherConfig(const ParameterSource& source) {
   MapPublisherConfig config;
   source.get("publish_rate", &config.publish_rate);
+  source.get("projected_map_rate", &config.projected_map_rate);
   source.get("save_prefix", &config.save_prefix);
   config.grid = readFusedGridConfig(source);
   config.validate();
@@ -153,6 +158,7 @@ MapPublisher::MapPublisher(const ros::NodeHandle& node_handle,
   diagnostics_.add("map publishing", this, &MapPublisher::fillDiagnostics);
   timer_ = topics.createWallTimer(ros::WallDuration(1.0 / config_.publish_rate),
                                   &MapPublisher::onTimer, this);
+  grid_thread_ = std::thread(&MapPublisher::sendGridAsFramesArrive, this);
 }
 
 MapPublisher::~MapPublisher() {
@@ -160,6 +166,49 @@ MapPublisher::~MapPublisher() {
   // onTimer, which uses it (ThreadSanitizer saw the Updater's mutex destroyed right after a
   // cycle on another thread when a MapServer was unloaded). stop() also waits for a running cycle.
   timer_.stop();
+  {
+    const std::lock_guard<std::mutex> lock(stop_mutex_);
+    stopping_ = true;
+  }
+  stop_requested_.notify_all();
+  map_->wakeWaiters();
+  grid_thread_.join();
+}
+
+void MapPublisher::sendGridAsFramesArrive() {
+  // A frame integrated wakes it; changes without a frame (corrections, clear_bbx, a reset) are
+  // sent at publish_rate. After a message the next waits 1 / projected_map_rate and at least three
+  // times the message's own time: projected_map takes at most a quarter of a core, however large.
+  const bool follow_frames = config_.projected_map_rate > 0.0;
+  const auto seconds = [](double value) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(value));
+  };
+  const Clock::duration period = seconds(1.0 / config_.publish_rate);
+  const Clock::duration min_interval =
+      follow_frames ? seconds(1.0 / config_.projected_map_rate) : period;
+  std::uint64_t frames_seen = map_->integratedCount();
+  Clock::time_point last_check = Clock::now();
+  Clock::time_point due = last_check;  // the next message not before
+  while (true) {
+    if (follow_frames) map_->waitForIntegrated(frames_seen, last_check + period);
+    {
+      std::unique_lock<std::mutex> lock(stop_mutex_);
+      const Clock::time_point until = follow_frames ? due : std::max(due, last_check + period);
+      if (stop_requested_.wait_until(lock, until, [this] { return stopping_; })) return;
+    }
+    frames_seen = map_->integratedCount();
+    const Clock::time_point start = Clock::now();
+    last_check = start;
+    if (!needsSending(grid_publisher_, grid_sent_)) continue;
+    publishGrid(ros::Time::now());
+    const Clock::time_point end = Clock::now();
+    due = std::max(start + min_interval, end + 3 * (end - start));
+  }
+}
+
+GridTimings MapPublisher::lastGridTimings() const {
+  const std::lock_guard<std::mutex> lock(grid_timings_mutex_);
+  return grid_timings_;
 }
 
 void MapPublisher::onTimer(const ros::WallTimerEvent& /*event*/) {
@@ -193,7 +242,6 @@ void MapPublisher::publishCycle() {
   const std::uint64_t cycles = t.cycles + 1;
   t = PublishTimings();
   t.cycles = cycles;
-  if (needsSending(grid_publisher_, grid_sent_)) publishGrid(stamp);
   const bool markers = needsSending(markers_publisher_, markers_sent_);
   const bool cloud = needsSending(cloud_publisher_, cloud_sent_);
   if (markers || cloud) refreshCache();
@@ -203,11 +251,11 @@ void MapPublisher::publishCycle() {
   t.occupied_voxels = cache_.occupiedCount();
   t.map_blocks = map_->voxels().blockCount();
   ROS_DEBUG_NAMED("publishing",
-                  "%s: cache %.2f ms (%zu blocks%s), grid %.2f ms (%zu blocks), markers %.2f ms, "
-                  "cloud %.2f ms, binary %.2f ms; %zu occupied voxels in %zu blocks",
+                  "%s: cache %.2f ms (%zu blocks%s), markers %.2f ms, cloud %.2f ms, binary %.2f "
+                  "ms; %zu occupied voxels in %zu blocks",
                   name_.c_str(), t.cache_ms, t.cache_blocks_refreshed,
-                  t.cache_full_rebuild ? ", full rebuild" : "", t.grid_ms, t.grid_blocks_processed,
-                  t.markers_ms, t.cloud_ms, t.binary_ms, t.occupied_voxels, t.map_blocks);
+                  t.cache_full_rebuild ? ", full rebuild" : "", t.markers_ms, t.cloud_ms,
+                  t.binary_ms, t.occupied_voxels, t.map_blocks);
 }
 
 void MapPublisher::refreshCache() {
@@ -247,8 +295,10 @@ void MapPublisher::publishGrid(const ros::Time& stamp) {
   }
   grid_publisher_.publish(grid);
   grid_sent_ = version;
-  timings_.grid_ms = millisecondsSince(start);
-  timings_.grid_blocks_processed = grid_view_.lastUpdateStats().map_blocks_processed;
+  const std::lock_guard<std::mutex> lock(grid_timings_mutex_);
+  ++grid_timings_.published;
+  grid_timings_.grid_ms = millisecondsSince(start);
+  grid_timings_.grid_blocks_processed = grid_view_.lastUpdateStats().map_blocks_processed;
 }
 
 void MapPublisher::publishMarkers(const ros::Time& stamp) {
@@ -351,8 +401,10 @@ void MapPublisher::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& 
   status.add("cache ms", t.cache_ms);
   status.add("cache blocks refreshed", t.cache_blocks_refreshed);
   status.add("cache full rebuild", t.cache_full_rebuild);
-  status.add("grid ms", t.grid_ms);
-  status.add("grid blocks processed", t.grid_blocks_processed);
+  const GridTimings grid = lastGridTimings();
+  status.add("projected_map messages", grid.published);
+  status.add("grid ms", grid.grid_ms);
+  status.add("grid blocks processed", grid.grid_blocks_processed);
   status.add("markers ms", t.markers_ms);
   status.add("cloud ms", t.cloud_ms);
   status.add("binary ms", t.binary_ms);

@@ -72,6 +72,27 @@ void SharedMap::noteIntegrated(const std::string& source, const ros::Time& stamp
   const std::lock_guard<std::mutex> lock(integrated_mutex_);
   integrated_.push_back({++integrated_count_, source, stamp});
   if (integrated_.size() > kIntegratedLogSize) integrated_.pop_front();
+  integrated_noted_.notify_all();
+}
+
+std::uint64_t SharedMap::integratedCount() const {
+  const std::lock_guard<std::mutex> lock(integrated_mutex_);
+  return integrated_count_;
+}
+
+bool SharedMap::waitForIntegrated(std::uint64_t after,
+                                  std::chrono::steady_clock::time_point deadline) {
+  std::unique_lock<std::mutex> lock(integrated_mutex_);
+  const std::uint64_t wake_calls = wake_calls_;
+  integrated_noted_.wait_until(
+      lock, deadline, [&] { return integrated_count_ > after || wake_calls_ != wake_calls; });
+  return integrated_count_ > after;
+}
+
+void SharedMap::wakeWaiters() {
+  const std::lock_guard<std::mutex> lock(integrated_mutex_);
+  ++wake_calls_;
+  integrated_noted_.notify_all();
 }
 
 std::vector<SharedMap::IntegratedFrame> SharedMap::integratedSince(std::uint64_t after) const {

@@ -89,6 +89,22 @@ double ratio(std::size_t part, std::size_t whole) {
 // The state once the map is built and the robot stands still; later tests build on it.
 State g_frozen;
 
+// projected_map follows the scans (projected_map_rate), not the MapServer's publish_rate (1 Hz
+// here): over 2 s of scans at 2 x 10 Hz, a timer at publish_rate would send at most 3.
+TEST(SimLaserMapping, ProjectedMapFollowsTheScans) {
+  ASSERT_TRUE(waitUntil([] { return stateOf(*g_observer).projected != nullptr; }, 60.0));
+  const State before = stateOf(*g_observer);
+  const std::size_t messages_before = g_observer->received("projected_map");
+  ros::WallDuration(2.0).sleep();
+  const State after = stateOf(*g_observer);
+  const std::size_t scans = after.front_integrated + after.rear_integrated -
+                            before.front_integrated - before.rear_integrated;
+  const std::size_t messages = g_observer->received("projected_map") - messages_before;
+  ROS_INFO("projected_map: %zu messages in 2 s, %zu scans integrated", messages, scans);
+  ASSERT_GE(scans, 10u);
+  EXPECT_GE(messages, 8u);
+}
+
 TEST(SimLaserMapping, BothProductsMatchGroundTruth) {
   const std::size_t min_scans = static_cast<std::size_t>(g_settings.min_scans) / 2;
   ASSERT_TRUE(waitUntil(

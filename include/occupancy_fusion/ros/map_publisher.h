@@ -3,10 +3,12 @@
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -23,7 +25,10 @@
 namespace occupancy_fusion {
 
 struct MapPublisherConfig {
-  double publish_rate = 1.0;        // Hz, how often watched outputs are refreshed
+  double publish_rate = 1.0;  // Hz, how often watched outputs are refreshed
+  // Hz: projected_map is sent soon after each frame a mapper integrated, at most this often
+  // (0: at publish_rate, as the other outputs).
+  double projected_map_rate = 50.0;
   std::string save_prefix = "map";  // ~save_map with an empty prefix writes <save_prefix>.ot etc.
   FusedGridConfig grid;             // occupancy_min_z / occupancy_max_z
 
@@ -47,13 +52,18 @@ struct PublishTimings {
   double cache_ms = 0.0;                   // refreshing the occupied-voxel cache
   std::size_t cache_blocks_refreshed = 0;  // blocks re-read for it
   bool cache_full_rebuild = false;
+  double markers_ms = 0.0;          // occupied_cells_vis_array
+  double cloud_ms = 0.0;            // octomap_point_cloud_centers
+  double binary_ms = 0.0;           // octomap_binary (whole-map conversion)
+  std::size_t occupied_voxels = 0;  // in the cache
+  std::size_t map_blocks = 0;       // allocated in the map
+};
+
+// projected_map's last update, sent from a thread of its own as frames are integrated.
+struct GridTimings {
+  std::uint64_t published = 0;            // projected_map messages sent so far
   double grid_ms = 0.0;                   // fused 2D view update + message
   std::size_t grid_blocks_processed = 0;  // map blocks the view re-read
-  double markers_ms = 0.0;                // occupied_cells_vis_array
-  double cloud_ms = 0.0;                  // octomap_point_cloud_centers
-  double binary_ms = 0.0;                 // octomap_binary (whole-map conversion)
-  std::size_t occupied_voxels = 0;        // in the cache
-  std::size_t map_blocks = 0;             // allocated in the map
 };
 
 // How long the MapPublisher keeps the shared map locked, measured from the outside: every call
@@ -86,12 +96,13 @@ class MapPublisher {
   MapPublisher(const ros::NodeHandle& node_handle, const ros::NodeHandle& private_node_handle,
                const std::string& name, std::shared_ptr<SharedMap> map,
                const MapPublisherConfig& config);
-  // Stops the timer first, waiting for a running publishing cycle.
+  // Stops the timer and projected_map's thread first, waiting for a running publishing cycle.
   ~MapPublisher();
   MapPublisher(const MapPublisher&) = delete;
   MapPublisher& operator=(const MapPublisher&) = delete;
 
   const PublishTimings& lastTimings() const { return timings_; }
+  GridTimings lastGridTimings() const;
   const MapLockStatistics& lockStatistics() const { return lock_statistics_; }
 
  private:
@@ -110,6 +121,7 @@ class MapPublisher {
   SentVersion currentVersion() const;
   void refreshCache();
   void publishGrid(const ros::Time& stamp);
+  void sendGridAsFramesArrive();  // projected_map's thread
   void publishMarkers(const ros::Time& stamp);
   void publishCloud(const ros::Time& stamp);
   void publishBinary(const ros::Time& stamp);
@@ -138,6 +150,12 @@ class MapPublisher {
   ros::WallTimer timer_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTime next_diagnostics_;  // diagnostics are published once per wall-clock second
+  mutable std::mutex grid_timings_mutex_;
+  GridTimings grid_timings_;
+  std::mutex stop_mutex_;
+  std::condition_variable stop_requested_;
+  bool stopping_ = false;
+  std::thread grid_thread_;  // last: started when everything it uses is built
 };
 
 }  // namespace occupancy_fusion

@@ -4,6 +4,8 @@
 // parameters and later users must agree on the geometry.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -73,6 +75,11 @@ class SharedMap {
   // The frames noted after frame number `after` (0: all kept), oldest first. Read before the map
   // is read for an output, every frame it returns is in what is read next.
   std::vector<IntegratedFrame> integratedSince(std::uint64_t after) const;
+  std::uint64_t integratedCount() const;  // the number of the last frame noted (0: none)
+  // Waits until a frame after number `after` is noted, `deadline` passes or wakeWaiters() is
+  // called; true when such a frame has been noted.
+  bool waitForIntegrated(std::uint64_t after, std::chrono::steady_clock::time_point deadline);
+  void wakeWaiters();
 
  private:
   SharedMapConfig config_;
@@ -84,6 +91,8 @@ class SharedMap {
   mutable std::mutex integrated_mutex_;
   std::deque<IntegratedFrame> integrated_;  // the last kIntegratedLogSize frames noted
   std::uint64_t integrated_count_ = 0;
+  std::condition_variable integrated_noted_;
+  std::uint64_t wake_calls_ = 0;  // wakeWaiters() so far
 };
 
 class MapRegistry {
