@@ -175,6 +175,27 @@ void mapFrame(const DynamicSceneCase& setup, const sim::Scene& scene, int k, dou
 // The map's occupied voxels (the laser layer's cells, at z = 0) in the places the object held,
 // grown by a voxel, whose centre lies farther than a voxel diagonal from the corridor's surfaces:
 // what the object left in the map.
+// Whether the sensor at `eye` sees any of a voxel's centre and corners (corners drawn in by a
+// tenth of a voxel, so that one touching a surface counts as seen from the side it faces) past
+// the static scene (the objects left out): what lies hidden behind the static scene cannot be
+// seen free by any sensor.
+// Cells of the laser layer: their centre and corners in the scan plane.
+bool anyPartInSight(const sim::Scene& scene, const Eigen::Vector3d& eye,
+                    const Eigen::Vector3d& centre, double resolution, bool planar) {
+  const double reach = 0.4 * resolution;
+  for (int corner = -1; corner < (planar ? 4 : 8); ++corner) {
+    Eigen::Vector3d point = centre;
+    if (corner >= 0) {
+      point += reach * Eigen::Vector3d(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1,
+                                       planar ? 0 : (corner & 4 ? 1 : -1));
+    }
+    const Eigen::Vector3d offset = point - eye;
+    const double distance = offset.norm();
+    if (!scene.castRay(eye, offset / distance, distance)) return true;
+  }
+  return false;
+}
+
 class ObjectRegion {
  public:
   ObjectRegion(const sim::Scene& corridor, const ObjectMotion& motion, double resolution,
@@ -196,13 +217,13 @@ class ObjectRegion {
         if (session.laserLayer().classify(value) != Occupancy::kOccupied) return;
         const Eigen::Vector2d centre = session.laserLayer().centerOf(cell);
         const Eigen::Vector3d point(centre.x(), centre.y(), 0.3);
-        count += in_view(point) && left(point) ? 1 : 0;
+        count += left(point) && in_view(point) ? 1 : 0;
       });
       return count;
     }
     session.map().forEachOccupiedVoxel([&](const VoxelIndex& voxel, float) {
       const Eigen::Vector3d centre = (voxel.cast<double>().array() + 0.5).matrix() * resolution_;
-      count += in_view(centre) && left(centre) ? 1 : 0;
+      count += left(centre) && in_view(centre) ? 1 : 0;
     });
     return count;
   }
@@ -340,16 +361,21 @@ DynamicSceneResult evaluateDynamicScene(const DynamicSceneCase& setup) {
     const auto start = std::chrono::steady_clock::now();
     mapFrame(setup, scene, k, x, &session);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const bool laser = isLaser(setup.mapper);
+    const Eigen::Isometry3d sensor = laser ? laserPose(x) : cameraPose(x);
     const auto in_view = [&](const Eigen::Vector3d& point) {
-      if (isLaser(setup.mapper)) {
-        const Eigen::Vector3d local = laserPose(x).inverse() * point;
-        return local.x() > 0.0 && local.head<2>().norm() < sim::LaserScanner().range_max;
+      const Eigen::Vector3d local = sensor.inverse() * point;
+      if (laser) {
+        if (!(local.x() > 0.0 && local.head<2>().norm() < sim::LaserScanner().range_max)) {
+          return false;
+        }
+      } else {
+        if (!(local.z() > 0.1 && local.z() < kMaxRange)) return false;
+        const double u = kCamera.fx * local.x() / local.z() + kCamera.cx;
+        const double v = kCamera.fy * local.y() / local.z() + kCamera.cy;
+        if (!(u >= 0.0 && u < kCamera.width && v >= 0.0 && v < kCamera.height)) return false;
       }
-      const Eigen::Vector3d local = cameraPose(x).inverse() * point;
-      if (!(local.z() > 0.1 && local.z() < kMaxRange)) return false;
-      const double u = kCamera.fx * local.x() / local.z() + kCamera.cx;
-      const double v = kCamera.fy * local.y() / local.z() + kCamera.cy;
-      return u >= 0.0 && u < kCamera.width && v >= 0.0 && v < kCamera.height;
+      return anyPartInSight(corridor, sensor.translation(), point, setup.resolution, laser);
     };
     const std::size_t left = region.count(session, in_view);
     if (k < result.change_frame) {

@@ -13,8 +13,8 @@
 // images, the stereo default or Table I, OctoMap's update on the same disparities, point clouds
 // of the depth images, or a 2D laser into the laser layer). After each frame: ghost voxels
 // (occupied, their centre in the volume the object held, grown by a voxel, farther than a voxel
-// diagonal from the static scene, and in the sensor's view at that frame; the laser layer's cells
-// in its footprint), and at the end
+// diagonal from the static scene, and in the sensor's view at that frame, in sight past the
+// static scene; the laser layer's cells in its footprint), and at the end
 // the coverage of the static surfaces 1-6 m ahead. Shared by `benchmark dynamic` and the tests.
 #pragma once
 
