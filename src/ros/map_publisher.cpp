@@ -190,7 +190,13 @@ void MapPublisher::sendGridAsFramesArrive() {
   Clock::time_point last_check = Clock::now();
   Clock::time_point due = last_check;  // the next message not before
   while (true) {
-    if (follow_frames) map_->waitForIntegrated(frames_seen, last_check + period);
+    // Read before stopping_: the destructor's wakeWaiters() after it then ends the wait at once.
+    const std::uint64_t wake_calls = map_->wakeCalls();
+    {
+      const std::lock_guard<std::mutex> lock(stop_mutex_);
+      if (stopping_) return;
+    }
+    if (follow_frames) map_->waitForIntegrated(frames_seen, last_check + period, wake_calls);
     {
       std::unique_lock<std::mutex> lock(stop_mutex_);
       const Clock::time_point until = follow_frames ? due : std::max(due, last_check + period);

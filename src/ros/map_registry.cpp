@@ -81,12 +81,17 @@ std::uint64_t SharedMap::integratedCount() const {
 }
 
 bool SharedMap::waitForIntegrated(std::uint64_t after,
-                                  std::chrono::steady_clock::time_point deadline) {
+                                  std::chrono::steady_clock::time_point deadline,
+                                  std::uint64_t wake_calls) {
   std::unique_lock<std::mutex> lock(integrated_mutex_);
-  const std::uint64_t wake_calls = wake_calls_;
   integrated_noted_.wait_until(
       lock, deadline, [&] { return integrated_count_ > after || wake_calls_ != wake_calls; });
   return integrated_count_ > after;
+}
+
+std::uint64_t SharedMap::wakeCalls() const {
+  const std::lock_guard<std::mutex> lock(integrated_mutex_);
+  return wake_calls_;
 }
 
 void SharedMap::wakeWaiters() {

@@ -76,9 +76,11 @@ class SharedMap {
   // is read for an output, every frame it returns is in what is read next.
   std::vector<IntegratedFrame> integratedSince(std::uint64_t after) const;
   std::uint64_t integratedCount() const;  // the number of the last frame noted (0: none)
-  // Waits until a frame after number `after` is noted, `deadline` passes or wakeWaiters() is
-  // called; true when such a frame has been noted.
-  bool waitForIntegrated(std::uint64_t after, std::chrono::steady_clock::time_point deadline);
+  // Waits until a frame after number `after` is noted, `deadline` passes or wakeWaiters() has
+  // been called since wakeCalls() returned `wake_calls`; true when such a frame has been noted.
+  bool waitForIntegrated(std::uint64_t after, std::chrono::steady_clock::time_point deadline,
+                         std::uint64_t wake_calls);
+  std::uint64_t wakeCalls() const;
   void wakeWaiters();
 
  private:
