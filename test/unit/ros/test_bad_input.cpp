@@ -25,6 +25,7 @@
 #include "occupancy_fusion/ros/conversions.h"
 #include "occupancy_fusion/ros/depth_messages.h"
 #include "occupancy_fusion/ros/disparity_messages.h"
+#include "occupancy_fusion/ros/map_publisher.h"
 #include "occupancy_fusion/sensors/laser_scan.h"
 
 namespace occupancy_fusion {
@@ -442,6 +443,27 @@ TEST(BadParameters, AreRejectedNamingTheParameter) {
     EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
   }
   EXPECT_NO_THROW(readVoxelMapConfig(DoubleParameters({{"resolution", 0.1}})));
+}
+
+// The MapServer's publishing rates: how often each output may be sent.
+TEST(BadParameters, PublishingRatesAreRejectedNamingTheParameter) {
+  const std::vector<std::pair<std::map<std::string, double>, std::string>> cases = {
+      {{{"publish_rate", 0.0}}, "publish_rate"},
+      {{{"publish_rate", std::nan("")}}, "publish_rate"},
+      {{{"projected_map_rate", -1.0}}, "projected_map_rate"},
+      {{{"projected_map_rate", std::numeric_limits<double>::infinity()}}, "projected_map_rate"},
+  };
+  for (const auto& [values, name] : cases) {
+    const std::string why =
+        messageOf<std::invalid_argument>([&] { readMapPublisherConfig(DoubleParameters(values)); });
+    EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
+  }
+  const MapPublisherConfig defaults = readMapPublisherConfig(DoubleParameters({}));
+  EXPECT_EQ(defaults.publish_rate, 1.0);
+  EXPECT_EQ(defaults.projected_map_rate, 50.0);
+  EXPECT_EQ(
+      readMapPublisherConfig(DoubleParameters({{"projected_map_rate", 0.0}})).projected_map_rate,
+      0.0);  // 0: projected_map at publish_rate
 }
 
 // A mapper nodelet's own settings: queue_size and threads.
