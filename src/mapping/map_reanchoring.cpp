@@ -323,9 +323,10 @@ void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double st
         stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
     if (!due) return;
   }
-  // Where it is due, whatever a correction being applied costs this frame: a submap that ran on
-  // would carry more of the odometry's drift (it is placed rigidly).
-  fusion_.startSubmap();
+  // Due, unless a correction is rebuilding the map: then a later frame cuts it. Waiting here
+  // held every mapper's frames for the rebuild (0.4-1.2 s on a building floor); the submap runs
+  // on by what the robot travels meanwhile, carrying that much more of the drift.
+  if (!fusion_.tryStartSubmap()) return;
   std::lock_guard<std::mutex> lock(mutex_);
   submap_start_position_ = position;
   submap_start_stamp_ = stamp;

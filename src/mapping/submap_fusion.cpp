@@ -114,6 +114,14 @@ int SubmapFusion::startSubmap() {
   return active_.id;
 }
 
+bool SubmapFusion::tryStartSubmap() {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_);
+  const std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return false;  // place() holds it for the whole rebuild
+  if (activeBlocks() > 0) closeActiveLocked(active_.written);
+  return true;
+}
+
 void SubmapFusion::fixWrittenSoFar() {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);

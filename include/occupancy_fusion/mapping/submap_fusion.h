@@ -132,6 +132,9 @@ class SubmapFusion {
   // nothing is reused.
   int startSubmap(const Eigen::Isometry3d& T_map_odom);
   int startSubmap();
+  // startSubmap(), unless a correction is rebuilding the map (place()): then nothing and false,
+  // at once. Waiting would hold every mapper's frames for the rebuild's time.
+  bool tryStartSubmap();
   // What the map holds so far (e.g. a saved map just loaded) becomes a fixed submap, never moved.
   void fixWrittenSoFar();
 

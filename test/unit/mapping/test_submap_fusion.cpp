@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <future>
 #include <map>
 #include <sstream>
 #include <utility>
@@ -357,6 +358,38 @@ TEST(SubmapFusion, MovedSubmapsAreDrawnAgainInTheOrderWritten) {
   EXPECT_NEAR(*layer.logOdds(layer.indexOf({1.25, 0.25})), cleared, 2 * kRounding);
   EXPECT_EQ(layer.occupancyAt({1.25, 0.25}), Occupancy::kFree);
   EXPECT_FALSE(layer.logOdds(layer.indexOf({0.25, 0.25})));  // nothing left where it was
+}
+
+// A submap due while a correction rebuilds the map is not started then (the frames would wait for
+// the whole rebuild): tryStartSubmap() answers at once, and starts it once the rebuild is done.
+TEST(SubmapFusion, ASubmapDueDuringARebuildStartsAfterItWithoutWaiting) {
+  struct HeldDrawer : LayerDrawer {
+    std::promise<void> drawing, release;
+    std::shared_future<void> released = release.get_future().share();
+    bool draw(int /*id*/, const Eigen::Isometry3d& /*T_map_odom*/,
+              GridLayer2D* /*layer*/) override {
+      drawing.set_value();
+      released.wait();  // the rebuild holds the fusion here
+      return false;
+    }
+  } drawer;
+  VoxelMap map(mapConfig());
+  GridLayer2D layer(layerConfig());
+  SubmapFusion fusion(&map, &layer, SubmapFusionConfig());
+  fusion.setLayerDrawer(&drawer);
+  scanWall(1.0, &layer);
+  fusion.startSubmap();
+  scanWall(2.0, &layer);  // submap 1, active
+  std::future<SubmapMoveResult> rebuild = std::async(std::launch::async, [&] {
+    return fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.5, 0.0, 0.0))}});
+  });
+  drawer.drawing.get_future().wait();
+  EXPECT_FALSE(fusion.tryStartSubmap());           // at once: a blocking start would hang here
+  EXPECT_EQ(fusion.beginFrame(12.0).submap(), 1);  // frames go on meanwhile, in submap 1
+  drawer.release.set_value();
+  EXPECT_EQ(rebuild.get().moved, 1u);
+  EXPECT_TRUE(fusion.tryStartSubmap());
+  EXPECT_EQ(fusion.submaps().back().id, 2);
 }
 
 TEST(SubmapFusion, SavedSubmapsMoveTheLoadedMapAsTheyMovedTheOriginal) {
