@@ -309,6 +309,7 @@ std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
 }
 
 void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double stamp) {
+  bool may_wait = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!started_) {
@@ -317,16 +318,23 @@ void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double st
       submap_start_stamp_ = stamp;
       return;
     }
+    const double travelled = (position - submap_start_position_).norm();
     const bool due =
-        (position - submap_start_position_).norm() > config_.submap_distance ||
+        travelled > config_.submap_distance ||
         (config_.submap_seconds > 0.0 && stamp - submap_start_stamp_ > config_.submap_seconds) ||
         stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
     if (!due) return;
+    may_wait = travelled <= kDeferredDistance * config_.submap_distance;
   }
-  // Due, unless a correction is rebuilding the map: then a later frame cuts it. Waiting here
-  // held every mapper's frames for the rebuild (0.4-1.2 s on a building floor); the submap runs
-  // on by what the robot travels meanwhile, carrying that much more of the drift.
-  if (!fusion_.tryStartSubmap()) return;
+  // While a correction rebuilds the map, a later frame cuts the submap: waiting here held every
+  // mapper's frames for the rebuild (0.4-1.2 s on a building floor). It runs on by at most a
+  // quarter of submap_distance more (a submap carries the drift within it: placed rigidly), then
+  // the frame waits.
+  if (may_wait) {
+    if (!fusion_.tryStartSubmap()) return;
+  } else {
+    fusion_.startSubmap();
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   submap_start_position_ = position;
   submap_start_stamp_ = stamp;

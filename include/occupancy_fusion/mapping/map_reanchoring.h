@@ -160,6 +160,8 @@ class MapReanchoring : private LayerDrawer {
   void correctInTurn();
   void stopCorrecting();  // drops a pending correction, waits for a running one
   void startSubmapIfDue(const Eigen::Vector3d& position, double stamp);
+  // A submap due while a correction rebuilds the map runs on up to this many submap_distance.
+  static constexpr double kDeferredDistance = 1.25;
 
   bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) override;
 
