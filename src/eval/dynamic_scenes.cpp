@@ -363,8 +363,9 @@ DynamicSceneResult evaluateDynamicScene(const DynamicSceneCase& setup) {
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const bool laser = isLaser(setup.mapper);
     const Eigen::Isometry3d sensor = laser ? laserPose(x) : cameraPose(x);
+    const Eigen::Isometry3d sensor_from_world = sensor.inverse();
     const auto in_view = [&](const Eigen::Vector3d& point) {
-      const Eigen::Vector3d local = sensor.inverse() * point;
+      const Eigen::Vector3d local = sensor_from_world * point;
       if (laser) {
         if (!(local.x() > 0.0 && local.head<2>().norm() < sim::LaserScanner().range_max)) {
           return false;
