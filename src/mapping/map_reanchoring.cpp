@@ -389,10 +389,12 @@ SubmapMoveResult MapReanchoring::applyMapToOdom(const Eigen::Isometry3d& T_map_o
 void MapReanchoring::followMapToOdom(const Eigen::Isometry3d& T_map_odom, double stamp) {
   std::optional<std::vector<StampedPose>> corrections = noteMapToOdom(T_map_odom, stamp);
   if (!corrections) return;
-  // The frames from now on go into a new submap at the new correction (after a correction still
-  // rebuilding the map, if one is: frames written at the old one would stretch across the jump);
-  // the submaps before are moved on the correcting thread, while this sensor's frames go on.
-  fusion_.startSubmap(T_map_odom);
+  // The frames from now on go into a new submap at the new correction; the submaps before are
+  // moved on the correcting thread, while this sensor's frames go on. While a correction still
+  // rebuilds the map, the active submap goes on at its old placement instead of waiting for it:
+  // the correction queued here places it by the jump's own correction (odometry is smooth across
+  // a jump, only its estimate jumps) and starts the next submap at T_map_odom.
+  fusion_.tryStartSubmap(T_map_odom);
   std::lock_guard<std::mutex> lock(worker_mutex_);
   pending_ = PendingCorrection{std::move(*corrections), T_map_odom, stamp};
   if (!worker_.joinable()) worker_ = std::thread([this] { correctInTurn(); });

@@ -122,7 +122,20 @@ bool SubmapFusion::tryStartSubmap() {
   return true;
 }
 
+bool SubmapFusion::tryStartSubmap(const Eigen::Isometry3d& T_map_odom) {
+  std::unique_lock<std::shared_mutex> frames(frames_mutex_);
+  const std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return false;
+  if (activeBlocks() == 0) {
+    active_.written = active_.placed = T_map_odom;
+  } else {
+    closeActiveLocked(T_map_odom);
+  }
+  return true;
+}
+
 void SubmapFusion::fixWrittenSoFar() {
+  std::lock_guard<std::mutex> correcting(correction_mutex_);
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   if (activeBlocks() == 0) return;
@@ -179,8 +192,9 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
                                      const std::optional<Eigen::Isometry3d>& next) {
   const auto start = std::chrono::steady_clock::now();
   SubmapMoveResult result;
+  std::lock_guard<std::mutex> correcting(correction_mutex_);
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::mutex> lock(mutex_);
   const int active_id = active_.id;
   const auto active_placement =
       std::find_if(placements.begin(), placements.end(),
@@ -225,7 +239,9 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
   // made at the new placements has them (one submap after another: the slower part).
   if (stores_->tiles && drawer_ != nullptr && !moved.empty()) {
     SpatialKeySet drawn_tiles;
-    drawTiles(moved, placed, &drawn_tiles);
+    drawTiles(moved, placed, &drawn_tiles, &lock);
+    placed.clear();  // a frame may have closed the active submap meanwhile
+    for (const Meta& submap : closed_) placed.push_back({submap.written, submap.placed});
     stores_->tiles->rebuild(drawn_tiles, placed);
     touched_tiles.insert(drawn_tiles.begin(), drawn_tiles.end());
   }
@@ -241,7 +257,7 @@ void SubmapFusion::setLayerDrawer(LayerDrawer* drawer) {
 }
 
 void SubmapFusion::drawTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
-                             SpatialKeySet* touched) {
+                             SpatialKeySet* touched, std::unique_lock<std::mutex>* lock) {
   // In the order written, each on what the submaps before it hold there now: a cell's updates
   // are then clamped in the order a single pass over the scans clamps them (drawn from unknown
   // and added, a wall that a later submap's scans cleared stays occupied). Submaps the drawer
@@ -259,7 +275,12 @@ void SubmapFusion::drawTiles(std::vector<int> moved, const std::vector<SubmapPla
       position.emplace(packKey(reach[i]), i);
       if (before[i].known_count > 0) layer.restoreTile(reach[i], before[i]);
     }
-    if (!drawer_->draw(id, placement.placed, &layer)) continue;
+    // Drawing is most of a correction's time: a frame due to close the active submap may do it
+    // meanwhile (it adds a submap after every moved one: no earlier submap's fold changes).
+    lock->unlock();
+    const bool drawn = drawer_->draw(id, placement.placed, &layer);
+    lock->lock();
+    if (!drawn) continue;
     std::vector<TileIndex> indices;
     std::vector<GridTile> from, to;
     layer.forEachTile([&](const TileIndex& index, const GridTile& after) {
@@ -367,6 +388,7 @@ Eigen::Isometry3d readPose(std::istream& in) {
 void SubmapFusion::save(std::ostream& out) { saveThen(out, {}); }
 
 void SubmapFusion::saveThen(std::ostream& out, const std::function<void()>& then) {
+  std::lock_guard<std::mutex> correcting(correction_mutex_);
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   if (activeBlocks() > 0) closeActiveLocked(active_.written);
@@ -387,6 +409,7 @@ void SubmapFusion::saveThen(std::ostream& out, const std::function<void()>& then
 }
 
 void SubmapFusion::restore(std::istream& in) {
+  std::lock_guard<std::mutex> correcting(correction_mutex_);
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   try {
@@ -459,6 +482,7 @@ void SubmapFusion::fixContentsLocked() {
 }
 
 void SubmapFusion::reset() {
+  std::lock_guard<std::mutex> correcting(correction_mutex_);
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   stores_->forEach([](auto& store) { store.reset(); });

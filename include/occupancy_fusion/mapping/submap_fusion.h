@@ -132,9 +132,11 @@ class SubmapFusion {
   // nothing is reused.
   int startSubmap(const Eigen::Isometry3d& T_map_odom);
   int startSubmap();
-  // startSubmap(), unless a correction is rebuilding the map (place()): then nothing and false,
-  // at once. Waiting would hold every mapper's frames for the rebuild's time.
+  // startSubmap(), unless a correction is re-sampling the map (place(); while it draws the laser
+  // layer anew, a submap may start): then nothing and false, at once. Waiting would hold every
+  // mapper's frames for the rebuild's time.
   bool tryStartSubmap();
+  bool tryStartSubmap(const Eigen::Isometry3d& T_map_odom);
   // What the map holds so far (e.g. a saved map just loaded) becomes a fixed submap, never moved.
   void fixWrittenSoFar();
 
@@ -190,9 +192,10 @@ class SubmapFusion {
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
   void restoreLocked(std::istream& in);
   // The moved submaps' laser tiles drawn anew by drawer_ where it can (they are re-sampled
-  // already). `placed`: every closed submap's placement, by id.
+  // already). `placed`: every closed submap's placement, by id. `lock` (on mutex_) is let go
+  // while a submap's scans are drawn.
   void drawTiles(std::vector<int> moved, const std::vector<SubmapPlacement>& placed,
-                 SpatialKeySet* touched);
+                 SpatialKeySet* touched, std::unique_lock<std::mutex>* lock);
   void fixContentsLocked();         // the map's contents become one fixed submap, nothing else
   void enforceMemoryBoundLocked();  // the oldest submaps' changes to the spill file
   void adoptContentsLocked();       // what the map holds, if anything, as fixed submap 0
@@ -207,6 +210,9 @@ class SubmapFusion {
   SubmapFusionConfig config_;
   double min_shift_;  // m, config_'s or a quarter voxel
 
+  // Held for a whole correction (place()) and by what must not come in while it lets go of
+  // mutex_ (saves, restores, resets): corrections one at a time.
+  std::mutex correction_mutex_;
   std::shared_mutex frames_mutex_;  // shared: frames in flight; unique: a submap closes
   mutable std::mutex mutex_;        // the submaps
   std::unique_ptr<Stores> stores_;

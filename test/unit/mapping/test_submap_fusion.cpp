@@ -360,36 +360,64 @@ TEST(SubmapFusion, MovedSubmapsAreDrawnAgainInTheOrderWritten) {
   EXPECT_FALSE(layer.logOdds(layer.indexOf({0.25, 0.25})));  // nothing left where it was
 }
 
-// A submap due while a correction rebuilds the map is not started then (the frames would wait for
-// the whole rebuild): tryStartSubmap() answers at once, and starts it once the rebuild is done.
-TEST(SubmapFusion, ASubmapDueDuringARebuildStartsAfterItWithoutWaiting) {
+using LayerCells = std::map<std::pair<int, int>, float>;
+
+LayerCells knownCells(const GridLayer2D& layer) {
+  LayerCells cells;
+  layer.forEachKnownCell([&](const CellIndex& index, float value) {
+    cells[{index.x(), index.y()}] = value;
+  });
+  return cells;
+}
+
+// A submap due while a correction re-samples the map is not started then (the frames would wait
+// for the whole rebuild): tryStartSubmap() answers at once. While the correction draws the laser
+// layer anew it starts, and its writes stay in the map as if it had started after the correction.
+TEST(SubmapFusion, ASubmapDueDuringACorrectionStartsWithoutWaitingForIt) {
   struct HeldDrawer : LayerDrawer {
     std::promise<void> drawing, release;
     std::shared_future<void> released = release.get_future().share();
+    bool held = false;
     bool draw(int /*id*/, const Eigen::Isometry3d& /*T_map_odom*/,
               GridLayer2D* /*layer*/) override {
+      if (held) return false;
+      held = true;
       drawing.set_value();
-      released.wait();  // the rebuild holds the fusion here
+      released.wait();  // the correction holds here, the fusion let go of
       return false;
     }
   } drawer;
-  VoxelMap map(mapConfig());
-  GridLayer2D layer(layerConfig());
+  const Eigen::Isometry3d moved(Eigen::Translation3d(0.5, 0.0, 0.0));
+  VoxelMap map(mapConfig()), map_after(mapConfig());
+  GridLayer2D layer(layerConfig()), layer_after(layerConfig());
   SubmapFusion fusion(&map, &layer, SubmapFusionConfig());
   fusion.setLayerDrawer(&drawer);
-  scanWall(1.0, &layer);
+  SubmapFusion after(&map_after, &layer_after, SubmapFusionConfig());  // the same, one at a time
+  for (GridLayer2D* each : {&layer, &layer_after}) scanWall(1.0, each);
   fusion.startSubmap();
-  scanWall(2.0, &layer);  // submap 1, active
-  std::future<SubmapMoveResult> rebuild = std::async(std::launch::async, [&] {
-    return fusion.place({{0, Eigen::Isometry3d(Eigen::Translation3d(0.5, 0.0, 0.0))}});
+  after.startSubmap();
+  for (GridLayer2D* each : {&layer, &layer_after}) scanWall(2.0, each);  // submap 1, active
+  std::future<SubmapMoveResult> correction = std::async(std::launch::async, [&] {
+    return fusion.place({{0, moved}});
   });
   drawer.drawing.get_future().wait();
-  EXPECT_FALSE(fusion.tryStartSubmap());           // at once: a blocking start would hang here
   EXPECT_EQ(fusion.beginFrame(12.0).submap(), 1);  // frames go on meanwhile, in submap 1
+  EXPECT_TRUE(fusion.tryStartSubmap());            // at once: a blocking start would hang here
+  scanWall(2.6, &layer);                           // submap 2, during the correction
   drawer.release.set_value();
-  EXPECT_EQ(rebuild.get().moved, 1u);
-  EXPECT_TRUE(fusion.tryStartSubmap());
+  EXPECT_EQ(correction.get().moved, 1u);
+  EXPECT_EQ(after.place({{0, moved}}).moved, 1u);
+  after.startSubmap();
+  scanWall(2.6, &layer_after);
   EXPECT_EQ(fusion.submaps().back().id, 2);
+  const LayerCells cells = knownCells(layer), expected = knownCells(layer_after);
+  ASSERT_EQ(cells.size(), expected.size());
+  for (const auto& cell : expected) EXPECT_NEAR(cells.at(cell.first), cell.second, 4 * kRounding);
+  // Moved again, the submap started during the correction goes along.
+  const Eigen::Isometry3d again(Eigen::Translation3d(0.0, 1.0, 0.0));
+  EXPECT_EQ(fusion.place({{2, again}}).moved, 1u);
+  EXPECT_EQ(layer.occupancyAt({1.05, 3.65}), Occupancy::kOccupied);
+  EXPECT_NE(layer.occupancyAt({1.05, 2.65}), Occupancy::kOccupied);
 }
 
 TEST(SubmapFusion, SavedSubmapsMoveTheLoadedMapAsTheyMovedTheOriginal) {
