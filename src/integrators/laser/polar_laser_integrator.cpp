@@ -83,13 +83,19 @@ LogOddsRaster rasterAround(const PolarField& field, const Pose2D& sensor, double
 
 void PolarLaserIntegrator::integrateIntoLayer(const LaserScan& scan, const Pose2D& sensor,
                                               GridLayer2D* layer, float weight) {
+  const LogOddsRaster raster = rasterOf(scan, sensor, layer->resolution(), weight);
+  layer->addRaster(raster.origin_cell, raster.width, raster.height, raster.data.data());
+}
+
+LogOddsRaster PolarLaserIntegrator::rasterOf(const LaserScan& scan, const Pose2D& sensor,
+                                             double resolution, float weight) {
   buildPolarField(scan, config_.model, &field_);
-  LogOddsRaster raster = rasterAround(field_, sensor, layer->resolution());
+  LogOddsRaster raster = rasterAround(field_, sensor, resolution);
   project(field_, sensor, config_.method, &raster);
   if (weight != 1.0f) {
     for (float& value : raster.data) value *= weight;  // NaN (no information) stays NaN
   }
-  layer->addRaster(raster.origin_cell, raster.width, raster.height, raster.data.data());
+  return raster;
 }
 
 Pose2D planarPose(const Eigen::Isometry3d& T_frame_sensor, double max_tilt, bool* upside_down) {

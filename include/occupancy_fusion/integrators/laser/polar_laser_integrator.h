@@ -55,6 +55,10 @@ class PolarLaserIntegrator {
   // `weight` scales the scan's log-ratios: a scan standing for several taken from about its pose.
   void integrateIntoLayer(const LaserScan& scan, const Pose2D& sensor, GridLayer2D* layer,
                           float weight = 1.0f);
+  // What integrateIntoLayer adds to a layer of `resolution` (its cells without information NaN):
+  // rasters of several scans can be made side by side and added in their order.
+  LogOddsRaster rasterOf(const LaserScan& scan, const Pose2D& sensor, double resolution,
+                         float weight = 1.0f);
 
  private:
   PolarLaserIntegratorConfig config_;
