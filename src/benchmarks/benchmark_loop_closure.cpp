@@ -27,6 +27,9 @@ LoopClosureCase caseFrom(const CommandLine& args) {
   setup.laps = args.doubleValue("laps", setup.laps);
   setup.drift = setup.drift.scaled(args.doubleValue("drift_scale", 1.0));
   setup.drift.seed = static_cast<unsigned>(args.intValue("drift_seed", 3));
+  setup.odometry_slip =
+      Eigen::Vector3d(args.doubleValue("slip_x", 0.0), args.doubleValue("slip_y", 0.0),
+                      args.doubleValue("slip_yaw", 0.0) * M_PI / 180.0);
   setup.localisation.closure_radius =
       args.doubleValue("closure_radius", setup.localisation.closure_radius);
   setup.localisation.correct_every_frames = args.intValue("correct_every", 0);

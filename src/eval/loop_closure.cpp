@@ -518,6 +518,12 @@ LoopClosureResult evaluateLoopClosure(const LoopClosureCase& setup,
   drive.rate_hz = setup.rate_hz;
   drive.truth = sim::buildingLoopPath(setup.step, setup.laps, setup.stretch);
   drive.odometry = sim::driftedOdometry(drive.truth, setup.drift);
+  const Eigen::Isometry3d slip =
+      Eigen::Translation3d(setup.odometry_slip.x(), setup.odometry_slip.y(), 0.0) *
+      Eigen::AngleAxisd(setup.odometry_slip.z(), Eigen::Vector3d::UnitZ());
+  for (std::size_t k = 1; k < drive.odometry.size(); ++k) {
+    drive.odometry[k] = slip * drive.odometry[k];
+  }
   drive.track = sim::runLocalisation(drive.truth, drive.odometry, setup.localisation);
   result.frames = static_cast<int>(drive.truth.size());
   result.corrections = drive.track.corrections;
