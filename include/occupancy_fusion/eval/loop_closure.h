@@ -43,7 +43,7 @@ struct LoopClosureCase {
   sim::LocalisationConfig localisation;
   bool depth = true, lasers = true, stereo = true;
   int evaluate_every = 25;       // frames between the points of the curves (and the last frame)
-  double submap_distance = 4.0;  // m (reanchoring/submap_distance)
+  double submap_distance = 3.0;  // m (reanchoring/submap_distance)
   // The building floor stretched in x and y (sim::stretchedInPlane): (1.5, 1.6) is 60 x 40 m.
   Eigen::Vector2d stretch = Eigen::Vector2d::Ones();
 

@@ -50,7 +50,7 @@ struct ReanchoringConfig {
   std::string base_frame = "base_link";  // reanchoring/base_frame: the body the path's poses are of
   // A new submap after the robot travelled this far (m) or this long (s, 0: no limit) since the
   // active one began (reanchoring/submap_distance, reanchoring/submap_seconds).
-  double submap_distance = 4.0;
+  double submap_distance = 3.0;
   double submap_seconds = 60.0;
   // reanchoring/min_shift, reanchoring/max_memory_mb (the submaps' changes in memory; beyond, the
   // oldest go to a temporary file beside the map's spill_folder, or the system's temporary folder)
