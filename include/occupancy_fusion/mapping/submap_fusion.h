@@ -95,8 +95,8 @@ class LayerDrawer {
  public:
   virtual ~LayerDrawer() = default;
   // Integrates submap `id`'s scans into `layer` (empty) with the submap placed at T_map_odom.
-  // false: nothing kept for it (its cells are re-sampled instead). Called for several submaps at
-  // once, on several threads.
+  // false: nothing kept for it (its cells are re-sampled instead). Called from place(), one
+  // submap at a time, without the fusion's lock: frames may start a submap meanwhile.
   virtual bool draw(int id, const Eigen::Isometry3d& T_map_odom, GridLayer2D* layer) = 0;
 };
 
