@@ -426,6 +426,7 @@ const std::vector<Workload>& workloads() {
        "      with --drift_scale 0 the corrections are that slip exactly, re-sampling alone)\n"
        "      [--stretch_x X] [--stretch_y Y] (the floor 40 x 25 m times X, Y; 1.5, 1.6: 60 x 40)\n"
        "      [--sensors depth,laser,stereo] [--evaluate_every N] [--curves CSV] [--grids PREFIX]\n"
+       "      [--real_time 1] (frames at 5 Hz by the wall clock, not as fast as they are mapped)\n"
        "      [--config FILE ...] (default: the shipped depth, laser, disparity and map server\n"
        "      configs)\n"
        "      --carmen LOG [--carmen LOG ...] [--path_every N] [--max_scans N]: real laser logs\n"
@@ -441,7 +442,7 @@ const std::vector<Workload>& workloads() {
         "sensors",    "evaluate_every", "curves",        "grids",
         "config",     "carmen",         "path_every",    "max_scans",
         "stretch_x",  "stretch_y",      "slip_x",        "slip_y",
-        "slip_yaw"},
+        "slip_yaw",   "real_time"},
        runLoopClosure},
       {"dynamic",
        "[--events removed_box,person,door,chair] [--mappers depth,stereo,stereo_table_i,\n"

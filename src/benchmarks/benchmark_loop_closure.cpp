@@ -37,6 +37,7 @@ LoopClosureCase caseFrom(const CommandLine& args) {
   setup.stretch =
       Eigen::Vector2d(args.doubleValue("stretch_x", 1.0), args.doubleValue("stretch_y", 1.0));
   setup.evaluate_every = args.intValue("evaluate_every", setup.evaluate_every);
+  setup.real_time = args.intValue("real_time", 0) != 0;
   const std::string sensors = args.value("sensors", "depth,laser,stereo");
   setup.depth = sensors.find("depth") != std::string::npos;
   setup.lasers = sensors.find("laser") != std::string::npos;

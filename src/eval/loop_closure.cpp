@@ -7,6 +7,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "occupancy_fusion/eval/simulated_frames.h"
 #include "occupancy_fusion/mapping/mapping_session.h"
@@ -316,12 +317,18 @@ LoopClosureRun mapOnce(const sim::Scene& scene, const LoopClosureCase& setup, co
   LoopClosureRun run;
   run.mapping = mapping;
   const int count = static_cast<int>(frames.size());
+  const auto started = std::chrono::steady_clock::now();
   const auto place = [&](FrameHeader header, int k) {
     if (true_poses) header.T_map_sensor = drive.truth[k] * mountOf(header.frame_id)->T_base_sensor;
     return header;
   };
   for (int k = 0; k < count; ++k) {
     const StepFrames& step = frames[static_cast<std::size_t>(k)];
+    if (setup.real_time) {
+      std::this_thread::sleep_until(started +
+                                    std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::duration<double>(k / setup.rate_hz)));
+    }
     if (step.depth) {
       DepthImageFrame frame = *step.depth;
       frame.header = place(frame.header, k);

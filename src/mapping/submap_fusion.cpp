@@ -99,12 +99,16 @@ Eigen::AlignedBox3d SubmapFusion::boundsOf(int id) const {
 int SubmapFusion::startSubmap(const Eigen::Isometry3d& T_map_odom) {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
+  startSubmapLocked(T_map_odom);
+  return active_.id;
+}
+
+void SubmapFusion::startSubmapLocked(const Eigen::Isometry3d& T_map_odom) {
   if (activeBlocks() == 0) {  // nothing written yet: the same submap, placed anew
     active_.written = active_.placed = T_map_odom;
   } else {
     closeActiveLocked(T_map_odom);
   }
-  return active_.id;
 }
 
 int SubmapFusion::startSubmap() {
@@ -126,11 +130,7 @@ bool SubmapFusion::tryStartSubmap(const Eigen::Isometry3d& T_map_odom) {
   std::unique_lock<std::shared_mutex> frames(frames_mutex_);
   const std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return false;
-  if (activeBlocks() == 0) {
-    active_.written = active_.placed = T_map_odom;
-  } else {
-    closeActiveLocked(T_map_odom);
-  }
+  startSubmapLocked(T_map_odom);
   return true;
 }
 

@@ -34,6 +34,9 @@ struct LoopClosureCase {
   double step = 0.2;         // m between frames along the loop (5 Hz: 1 m/s)
   double laps = 1.25;        // of the 88 m loop: back at the start once, then on
   double rate_hz = 5.0;      // frames per second (the stamps)
+  // Frames fed at rate_hz by the wall clock, as sensors give them (a correction then runs beside
+  // the mappers on the cores they leave), instead of each as soon as the one before is mapped.
+  bool real_time = false;
   sim::OdometryDriftConfig drift = sim::OdometryDriftConfig();
   // The odometry slips by (x m, y m, yaw rad) between the first two frames (a wheel slip), and
   // the localisation learns it at the first loop closure: with drift.scaled(0) the corrections

@@ -190,6 +190,7 @@ class SubmapFusion {
 
   // By value: callers pass the active submap's own placement, which closing it replaces.
   void closeActiveLocked(Eigen::Isometry3d next_T_map_odom);
+  void startSubmapLocked(const Eigen::Isometry3d& T_map_odom);  // startSubmap's, under its locks
   void restoreLocked(std::istream& in);
   // The moved submaps' laser tiles drawn anew by drawer_ where it can (they are re-sampled
   // already). `placed`: every closed submap's placement, by id. `lock` (on mutex_) is let go
