@@ -342,7 +342,7 @@ std::optional<MapReanchoring::PlacedFrame> MapReanchoring::placeFrame(
 }
 
 void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double stamp) {
-  bool may_wait = false;
+  bool may_defer = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!started_) {
@@ -357,13 +357,13 @@ void MapReanchoring::startSubmapIfDue(const Eigen::Vector3d& position, double st
         (config_.submap_seconds > 0.0 && stamp - submap_start_stamp_ > config_.submap_seconds) ||
         stamp < submap_start_stamp_;  // time went back: a new recording or a reset clock
     if (!due) return;
-    may_wait = travelled <= kDeferredDistance * config_.submap_distance;
+    may_defer = travelled <= kDeferredDistance * config_.submap_distance;
   }
   // While a correction rebuilds the map, a later frame cuts the submap: waiting here held every
   // mapper's frames for the rebuild (0.4-1.2 s on a building floor). It runs on by at most a
   // quarter of submap_distance more (a submap carries the drift within it: placed rigidly), then
   // the frame waits.
-  if (may_wait) {
+  if (may_defer) {
     if (!fusion_.tryStartSubmap()) return;
   } else {
     fusion_.startSubmap();

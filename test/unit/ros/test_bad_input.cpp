@@ -445,6 +445,16 @@ TEST(BadParameters, AreRejectedNamingTheParameter) {
   EXPECT_NO_THROW(readVoxelMapConfig(DoubleParameters({{"resolution", 0.1}})));
 }
 
+// Each case's values rejected by `read` with std::invalid_argument, its message naming the
+// parameter.
+template <class Values, class Read>
+void expectEachRejectedNaming(const std::vector<std::pair<Values, std::string>>& cases, Read read) {
+  for (const auto& [values, name] : cases) {
+    const std::string why = messageOf<std::invalid_argument>([&] { read(values); });
+    EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
+  }
+}
+
 // The MapServer's publishing rates: how often each output may be sent.
 TEST(BadParameters, PublishingRatesAreRejectedNamingTheParameter) {
   const std::vector<std::pair<std::map<std::string, double>, std::string>> cases = {
@@ -453,11 +463,9 @@ TEST(BadParameters, PublishingRatesAreRejectedNamingTheParameter) {
       {{{"projected_map_rate", -1.0}}, "projected_map_rate"},
       {{{"projected_map_rate", std::numeric_limits<double>::infinity()}}, "projected_map_rate"},
   };
-  for (const auto& [values, name] : cases) {
-    const std::string why =
-        messageOf<std::invalid_argument>([&] { readMapPublisherConfig(DoubleParameters(values)); });
-    EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
-  }
+  expectEachRejectedNaming(cases, [](const std::map<std::string, double>& values) {
+    readMapPublisherConfig(DoubleParameters(values));
+  });
   const MapPublisherConfig defaults = readMapPublisherConfig(DoubleParameters({}));
   EXPECT_EQ(defaults.publish_rate, 1.0);
   EXPECT_EQ(defaults.projected_map_rate, 50.0);
@@ -488,11 +496,9 @@ TEST(BadParameters, MapperQueueAndThreadsAreRejectedNamingTheParameter) {
       {{{"threads", -1}}, "threads"},
       {{{"threads", 257}}, "threads"},
   };
-  for (const auto& [values, name] : cases) {
-    const std::string why =
-        messageOf<std::invalid_argument>([&] { readMapperNodeletConfig(IntParameters(values)); });
-    EXPECT_NE(why.find(name), std::string::npos) << name << ": " << why;
-  }
+  expectEachRejectedNaming(cases, [](const std::map<std::string, int>& values) {
+    readMapperNodeletConfig(IntParameters(values));
+  });
   const MapperNodeletConfig defaults = readMapperNodeletConfig(IntParameters({}));
   EXPECT_EQ(defaults.queue_size, 5);
   EXPECT_EQ(defaults.threads, 0);
