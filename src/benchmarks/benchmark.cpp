@@ -421,6 +421,7 @@ const std::vector<Workload>& workloads() {
       {"loop-closure",
        "[--resolution R] [--step M] [--laps L] [--drift_scale X] [--drift_seed K]\n"
        "      [--closure_radius M] [--correct_every N] [--submap_distance M]\n"
+       "      [--keyframe_distance M] (the SLAM stand-in's keyframes: one every M of travel)\n"
        "      [--slip_x M] [--slip_y M] [--slip_yaw DEG] (the odometry slips after the first "
        "frame:\n"
        "      with --drift_scale 0 the corrections are that slip exactly, re-sampling alone)\n"
@@ -437,12 +438,12 @@ const std::vector<Workload>& workloads() {
        "      at loop closures; mapped without submaps, re-anchored by its path and by tf's\n"
        "      map -> odom, and with the true poses: false-occupied voxels, surface coverage and\n"
        "      projected_map's IoU with the true-pose map, mapper times, memory, correction time",
-       {"resolution", "step",           "laps",          "drift_scale",
-        "drift_seed", "closure_radius", "correct_every", "submap_distance",
-        "sensors",    "evaluate_every", "curves",        "grids",
-        "config",     "carmen",         "path_every",    "max_scans",
-        "stretch_x",  "stretch_y",      "slip_x",        "slip_y",
-        "slip_yaw",   "real_time"},
+       {"resolution",      "step",           "laps",           "drift_scale",
+        "drift_seed",      "closure_radius", "correct_every",  "keyframe_distance",
+        "submap_distance", "sensors",        "evaluate_every", "curves",
+        "grids",           "config",         "carmen",         "path_every",
+        "max_scans",       "stretch_x",      "stretch_y",      "slip_x",
+        "slip_y",          "slip_yaw",       "real_time"},
        runLoopClosure},
       {"dynamic",
        "[--events removed_box,person,door,chair] [--mappers depth,stereo,stereo_table_i,\n"

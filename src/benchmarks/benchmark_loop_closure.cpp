@@ -33,6 +33,8 @@ LoopClosureCase caseFrom(const CommandLine& args) {
   setup.localisation.closure_radius =
       args.doubleValue("closure_radius", setup.localisation.closure_radius);
   setup.localisation.correct_every_frames = args.intValue("correct_every", 0);
+  setup.localisation.keyframe_distance =
+      args.doubleValue("keyframe_distance", setup.localisation.keyframe_distance);
   setup.submap_distance = args.doubleValue("submap_distance", setup.submap_distance);
   setup.stretch =
       Eigen::Vector2d(args.doubleValue("stretch_x", 1.0), args.doubleValue("stretch_y", 1.0));

@@ -62,6 +62,7 @@ struct VoxelStoreTraits : PackedChangesTraits<VoxelMap, VoxelBlock, VoxelBlock::
   }
   // A cell's index as a point of the map frame (m, its corner) and back.
   static Eigen::Vector3d point(const Eigen::Vector3d& cell) { return cell; }
+  static Eigen::Vector3d scaled(const Eigen::Vector3d& point) { return point; }
   static Index floorIndex(const Eigen::Vector3d& scaled) {
     return scaled.array().floor().cast<int>();
   }
@@ -93,6 +94,7 @@ struct TileStoreTraits : PackedChangesTraits<GridLayer2D, GridTile, GridTile::kA
     return GridLayer2D::cellIndex(container, linear);
   }
   static Eigen::Vector3d point(const Eigen::Vector2d& cell) { return {cell.x(), cell.y(), 0.0}; }
+  static Eigen::Vector2d scaled(const Eigen::Vector3d& point) { return point.head<2>(); }
   static Index floorIndex(const Eigen::Vector3d& scaled) {
     return scaled.head<2>().array().floor().cast<int>();
   }
@@ -131,6 +133,7 @@ class StoreSubmaps {
   using Cells = typename Traits::Cells;
   using Index = typename Traits::Index;
   using Vector = Eigen::Matrix<double, Index::RowsAtCompileTime, 1>;
+  static constexpr int kDimensions = Index::RowsAtCompileTime;
 
   explicit StoreSubmaps(Store* store)
       : store_(store), active_(std::make_unique<ActiveWrites>(store->resolution())) {}
@@ -610,8 +613,8 @@ class StoreSubmaps {
 
   // Submap `id`'s changes added to block `index`'s cells at the submap's placement. A moved
   // submap's grid no longer lines up with the map's: each cell takes the change of the written
-  // cell under its centre (nearest cell; interpolating between cells, measured, placed thin walls
-  // no better and cost four to eight reads a cell: docs/loop_closures.md).
+  // cell under its centre (nearest cell), and where that change is occupied evidence (> 0), its
+  // mix with the known neighbours' by distance (sampledChange).
   void foldInto(int id, const SubmapPlacement& submap_placement, const Index& index,
                 Cells* cells) const {
     const Record& record = records_[id];
@@ -631,11 +634,41 @@ class StoreSubmaps {
       const Vector center =
           (Traits::cellOf(index, linear).template cast<double>() + Vector::Constant(0.5)) *
           resolution;
-      const float change =
-          cache->change(Traits::floorIndex(to_written * Traits::point(center) / resolution));
+      const float change = sampledChange(
+          cache.get(), Traits::scaled(to_written * Traits::point(center) / resolution));
       cells->set(linear, addLogOddsChange(cells->log_odds[linear], change, min, max));
     }
   }
+
+  // The written grid's change at `at` (in cells: cell c spans [c, c + 1)). Free evidence fills
+  // wide regions, and the nearest cell's is taken. Occupied evidence lies in shells a cell or two
+  // thick, and the nearest cell moves it up to 0.87 cells outwards (a wall thickened where a
+  // rotated grid rounds away from it): there the change is mixed (bi-, trilinearly) with its known
+  // neighbours', so a cell whose centre lies far from the written surface cell takes in their
+  // free evidence. Building loop at twice the drift: false-occupied 1.28 -> 0.93 x the true-pose
+  // map's, moves 1.25 x as long (docs/loop_closures.md).
+  static float sampledChange(SourceCache* cache, const Vector& at) {
+    const float nearest = cache->change(floorOf(at));
+    if (!(nearest > 0.0f)) return nearest;  // free, or no change (NaN)
+    const Vector below = (at - Vector::Constant(0.5)).array().floor();
+    const Vector fraction = at - Vector::Constant(0.5) - below;
+    double sum = 0.0, weights = 0.0;
+    for (int corner = 0; corner < (1 << kDimensions); ++corner) {
+      Index cell = below.template cast<int>();
+      double weight = 1.0;
+      for (int axis = 0; axis < kDimensions; ++axis) {
+        const bool above = (corner >> axis) & 1;
+        cell[axis] += above ? 1 : 0;
+        weight *= above ? fraction[axis] : 1.0 - fraction[axis];
+      }
+      const float change = cache->change(cell);
+      if (weight <= 0.0 || std::isnan(change)) continue;  // unknown neighbours add nothing
+      sum += weight * change;
+      weights += weight;
+    }
+    return weights > 0.0 ? static_cast<float>(sum / weights) : nearest;
+  }
+  static Index floorOf(const Vector& at) { return at.array().floor().template cast<int>(); }
 
   Store* store_;
   SubmapSpillFile* spill_ = nullptr;  // the fusion's, when the submaps have a memory bound

@@ -160,6 +160,51 @@ TEST(SubmapFusion, ACorrectedDriftedSubmapLandsWhereTheTruePosesPutIt) {
   EXPECT_EQ(map.occupancyAt({2.05, 0.05, 0.55}), Occupancy::kOccupied);
 }
 
+TEST(SubmapFusion, TurnedOccupiedEvidenceIsCarriedOnlyToCellsNearWhereItWasMeasured) {
+  // Free space with a weakly occupied cell (one hit more than misses: a noise voxel beside a
+  // wall) and a strongly occupied one. Re-sampled by the nearest written cell alone, a cell of
+  // the turned grid whose centre lies up to half a voxel off either (per axis) takes its
+  // evidence, so noise voxels move outwards by up to 0.87 voxels and walls thicken. Mixed with
+  // the free neighbours by distance, a weak change of +0.4 among -1.0 stays occupied only where
+  // the cell's weight exceeds 1 / 1.4: within 0.29 voxels per axis of where it was written.
+  const VoxelIndex weak(13, 15, 5), strong(17, 15, 5);
+  int weak_carried = 0;
+  for (int turn = 0; turn < 12; ++turn) {
+    VoxelMap map(mapConfig());
+    SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
+    for (int z = 1; z <= 9; ++z) {
+      for (int y = 11; y <= 19; ++y) {
+        for (int x = 9; x <= 21; ++x) map.updateVoxel(VoxelIndex(x, y, z), -1.0f);
+      }
+    }
+    map.updateVoxel(weak, 1.4f);
+    map.updateVoxel(strong, 4.0f);
+    fusion.startSubmap(Eigen::Isometry3d::Identity());
+    const Eigen::Isometry3d placed(
+        Eigen::Translation3d(0.013 * turn, -0.029 * turn, 0.007 * turn) *
+        Eigen::AngleAxisd(0.05 + 0.047 * turn, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()));
+    ASSERT_EQ(fusion.place({{0, placed}}).moved, 1u);
+    bool strong_found = false, weak_found = false;
+    for (const Eigen::Vector3i& index : occupied(map)) {
+      const Eigen::Vector3d written =
+          placed.inverse() * ((index.cast<double>().array() + 0.5) * kResolution).matrix() /
+          kResolution;
+      const VoxelIndex source = written.array().floor().cast<int>();
+      ASSERT_TRUE(source == weak || source == strong) << index.transpose();
+      strong_found |= source == strong;
+      if (source != weak) continue;
+      weak_found = true;
+      const Eigen::Vector3d off = written - (weak.cast<double>().array() + 0.5).matrix();
+      EXPECT_LT(off.cwiseAbs().maxCoeff(), 0.3) << "turn " << turn;
+    }
+    EXPECT_TRUE(strong_found) << "turn " << turn;  // within 0.78 voxels per axis: always
+    weak_carried += weak_found ? 1 : 0;
+  }
+  // Neither dropped nor always kept: where a cell's centre falls near its own.
+  EXPECT_GT(weak_carried, 0);
+  EXPECT_LT(weak_carried, 12);
+}
+
 TEST(SubmapFusion, TheActiveSubmapsWritesStayOnTopOfARebuild) {
   VoxelMap map(mapConfig());
   SubmapFusion fusion(&map, nullptr, SubmapFusionConfig());
