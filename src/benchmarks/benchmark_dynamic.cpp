@@ -27,10 +27,17 @@ std::vector<double> numbers(const CommandLine& args, const std::string& name,
   return result;
 }
 
-// The ghost after n frames without the object (the last one mapped if fewer).
+// The ghost (its part seen through) after n frames without the object (the last one mapped if
+// fewer).
+std::size_t after(const std::vector<std::size_t>& ghost, std::size_t n) {
+  if (ghost.empty()) return 0;
+  return ghost[std::min(n, ghost.size()) - 1];
+}
 std::size_t ghostAfter(const DynamicSceneResult& result, std::size_t n) {
-  if (result.ghost.empty()) return 0;
-  return result.ghost[std::min(n, result.ghost.size()) - 1];
+  return after(result.ghost, n);
+}
+std::size_t seenThroughAfter(const DynamicSceneResult& result, std::size_t n) {
+  return after(result.ghost_seen_through, n);
 }
 
 }  // namespace
@@ -58,7 +65,8 @@ int runDynamic(const CommandLine& args) {
   if (args.has("curves")) {
     curves.open(args.value("curves"));
     if (!curves) throw UsageError("cannot write " + args.value("curves"));
-    curves << "event,mapper,resolution,speed,frames_without_object,ghost,object_voxels\n";
+    curves << "event,mapper,resolution,speed,frames_without_object,ghost,object_voxels,"
+              "ghost_seen_through\n";
   }
   for (const DynamicEvent event : events) {
     for (const DynamicMapper mapper : mappers) {
@@ -78,16 +86,18 @@ int runDynamic(const CommandLine& args) {
           std::printf(
               "dynamic event=%s mapper=%s resolution=%.2f speed=%.2f rate_hz=%.0f "
               "object_voxels=%zu ghost_after_1=%zu ghost_after_3=%zu ghost_after_5=%zu "
-              "ghost_last=%zu frames_to_clear=%d static_coverage=%.3f ms_per_frame=%.2f\n",
+              "ghost_last=%zu frames_to_clear=%d seen_through_after_5=%zu "
+              "frames_to_clear_seen_through=%d static_coverage=%.3f ms_per_frame=%.2f\n",
               toString(event).c_str(), toString(mapper).c_str(), resolution, speed, setup.rate(),
               result.object_voxels, ghostAfter(result, 1), ghostAfter(result, 3),
               ghostAfter(result, 5), ghostAfter(result, result.ghost.size()),
-              result.frames_to_clear, result.static_coverage, result.ms_per_frame);
+              result.frames_to_clear, seenThroughAfter(result, 5),
+              result.frames_to_clear_seen_through, result.static_coverage, result.ms_per_frame);
           std::fflush(stdout);
           for (std::size_t i = 0; curves && i < result.ghost.size(); ++i) {
             curves << toString(event) << "," << toString(mapper) << "," << resolution << ","
                    << speed << "," << i + 1 << "," << result.ghost[i] << "," << result.object_voxels
-                   << "\n";
+                   << "," << result.ghost_seen_through[i] << "\n";
           }
         }
       }

@@ -196,6 +196,28 @@ bool anyPartInSight(const sim::Scene& scene, const Eigen::Vector3d& eye,
   return false;
 }
 
+// Whether a ray of the sensor through any part of the cell (as anyPartInSight) returns from the
+// static scene at least kBehind beyond it, within `range`: what lets a measurement say that the
+// cell is free now. A ray without a return, or one ending just behind the cell, says nothing.
+constexpr double kBehind = 0.2;  // m
+bool anyPartSeenThrough(const sim::Scene& scene, const Eigen::Vector3d& eye,
+                        const Eigen::Vector3d& centre, double resolution, bool planar,
+                        double range) {
+  const double reach = 0.4 * resolution;
+  for (int corner = -1; corner < (planar ? 4 : 8); ++corner) {
+    Eigen::Vector3d point = centre;
+    if (corner >= 0) {
+      point += reach * Eigen::Vector3d(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1,
+                                       planar ? 0 : (corner & 4 ? 1 : -1));
+    }
+    const Eigen::Vector3d offset = point - eye;
+    const double distance = offset.norm();
+    const std::optional<double> hit = scene.castRay(eye, offset / distance, range);
+    if (hit && *hit > distance + kBehind) return true;
+  }
+  return false;
+}
+
 class ObjectRegion {
  public:
   ObjectRegion(const sim::Scene& corridor, const ObjectMotion& motion, double resolution,
@@ -208,24 +230,29 @@ class ObjectRegion {
     }
   }
 
-  // Those the sensor sees now (in_view of their centre): what leaves the view cannot be cleared.
-  template <class InView>
-  std::size_t count(const MappingSession& session, InView in_view) const {
-    std::size_t count = 0;
+  // Those the sensor sees now (in_view of their centre): what leaves the view cannot be cleared;
+  // and of those, the ones seen_through.
+  template <class InView, class SeenThrough>
+  std::pair<std::size_t, std::size_t> count(const MappingSession& session, InView in_view,
+                                            SeenThrough seen_through) const {
+    std::size_t count = 0, through = 0;
+    const auto add = [&](const Eigen::Vector3d& point) {
+      if (!left(point) || !in_view(point)) return;
+      ++count;
+      through += seen_through(point) ? 1 : 0;
+    };
     if (planar_) {
       session.laserLayer().forEachKnownCell([&](const CellIndex& cell, float value) {
         if (session.laserLayer().classify(value) != Occupancy::kOccupied) return;
         const Eigen::Vector2d centre = session.laserLayer().centerOf(cell);
-        const Eigen::Vector3d point(centre.x(), centre.y(), 0.3);
-        count += left(point) && in_view(point) ? 1 : 0;
+        add(Eigen::Vector3d(centre.x(), centre.y(), 0.3));
       });
-      return count;
+      return {count, through};
     }
     session.map().forEachOccupiedVoxel([&](const VoxelIndex& voxel, float) {
-      const Eigen::Vector3d centre = (voxel.cast<double>().array() + 0.5).matrix() * resolution_;
-      count += left(centre) && in_view(centre) ? 1 : 0;
+      add((voxel.cast<double>().array() + 0.5).matrix() * resolution_);
     });
-    return count;
+    return {count, through};
   }
 
  private:
@@ -275,6 +302,18 @@ double staticCoverage(const sim::Scene& corridor, const MappingSession& session,
     covered += found ? 1 : 0;
   }
   return samples == 0 ? 0.0 : static_cast<double>(covered) / samples;
+}
+
+// Frames without the object after which `ghost` stays below 5 % of `object_voxels` (ghost[i] is
+// after i + 1 frames); -1: not within them.
+int framesBelow(const std::vector<std::size_t>& ghost, std::size_t object_voxels) {
+  const double bound = 0.05 * static_cast<double>(object_voxels);
+  int frames = -1;
+  for (int i = static_cast<int>(ghost.size()) - 1; i >= 0; --i) {
+    if (static_cast<double>(ghost[static_cast<std::size_t>(i)]) >= bound) break;
+    frames = i + 1;
+  }
+  return frames;
 }
 
 }  // namespace
@@ -378,19 +417,22 @@ DynamicSceneResult evaluateDynamicScene(const DynamicSceneCase& setup) {
       }
       return anyPartInSight(corridor, sensor.translation(), point, setup.resolution, laser);
     };
-    const std::size_t left = region.count(session, in_view);
+    const double range = laser ? sim::LaserScanner().range_max : kMaxRange;
+    const auto seen_through = [&](const Eigen::Vector3d& point) {
+      return anyPartSeenThrough(corridor, sensor.translation(), point, setup.resolution, laser,
+                                range);
+    };
+    const auto [left, through] = region.count(session, in_view, seen_through);
     if (k < result.change_frame) {
       result.object_voxels = std::max(result.object_voxels, left);
     } else {
       result.ghost.push_back(left);
+      result.ghost_seen_through.push_back(through);
     }
   }
-  // Cleared: below 5 % from that frame on (ghost[i] is after i + 1 frames without the object).
-  const double bound = 0.05 * static_cast<double>(result.object_voxels);
-  for (int i = static_cast<int>(result.ghost.size()) - 1; i >= 0; --i) {
-    if (static_cast<double>(result.ghost[static_cast<std::size_t>(i)]) >= bound) break;
-    result.frames_to_clear = i + 1;
-  }
+  result.frames_to_clear = framesBelow(result.ghost, result.object_voxels);
+  result.frames_to_clear_seen_through =
+      framesBelow(result.ghost_seen_through, result.object_voxels);
   result.static_coverage =
       staticCoverage(corridor, session, x, setup.resolution, isLaser(setup.mapper));
   result.ms_per_frame = 1e3 * seconds / motion.frames();

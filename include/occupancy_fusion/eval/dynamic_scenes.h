@@ -14,7 +14,8 @@
 // of the depth images, or a 2D laser into the laser layer). After each frame: ghost voxels
 // (occupied, their centre in the volume the object held, grown by a voxel, farther than a voxel
 // diagonal from the static scene, and in the sensor's view at that frame, in sight past the
-// static scene; the laser layer's cells in its footprint), and at the end
+// static scene; the laser layer's cells in its footprint) and of those the ones a ray of the
+// sensor passes to a surface behind them, and at the end
 // the coverage of the static surfaces 1-6 m ahead. Shared by `benchmark dynamic` and the tests.
 #pragma once
 
@@ -66,9 +67,15 @@ struct DynamicSceneResult {
   int change_frame = 0;
   std::vector<std::size_t> ghost;
   std::size_t object_voxels = 0;
-  // Frames without the object (from the change on) after which the ghost stays below 5 % of
-  // object_voxels; -1: not within the frames mapped.
+  // Of the ghost, per frame, the voxels (cells) the sensor sees through: a ray of it through
+  // the voxel returns from a static surface at least 0.2 m beyond it, within its range. Only
+  // these can be measured free; the rest (behind them only rays without a return, or the
+  // surface within 0.2 m) stays until the sensor moves.
+  std::vector<std::size_t> ghost_seen_through;
+  // Frames without the object (from the change on) after which the ghost (its part seen
+  // through) stays below 5 % of object_voxels; -1: not within the frames mapped.
   int frames_to_clear = -1;
+  int frames_to_clear_seen_through = -1;
   double static_coverage = 0.0;  // of the corridor's surfaces in view at the end
   double ms_per_frame = 0.0;
 };

@@ -59,6 +59,24 @@ TEST(DynamicScenes, DepthImagesClearTheBox) {
   EXPECT_EQ(result.ghost.back(), 0u);
 }
 
+// Point clouds of a standing camera: the box's top edge is passed only by rays that reach
+// nothing within the camera's 8 m, which carry no free space, so it stays; the seen-through count
+// leaves it out and falls below 5 % when OctoMap's update clears the rest.
+TEST(DynamicScenes, WhatOnlyRaysWithoutAReturnPassIsNotSeenThrough) {
+  const DynamicSceneCase setup = removedBox(DynamicMapper::kPointCloud);
+  const DynamicSceneResult result = evaluateDynamicScene(setup);
+  ASSERT_EQ(result.ghost_seen_through.size(), result.ghost.size());
+  for (std::size_t i = 0; i < result.ghost.size(); ++i) {
+    EXPECT_LE(result.ghost_seen_through[i], result.ghost[i]);
+  }
+  EXPECT_GT(result.object_voxels, 50u);
+  EXPECT_GT(result.ghost.back(), result.object_voxels / 20);  // the edge stays
+  EXPECT_EQ(result.frames_to_clear, -1);
+  EXPECT_EQ(result.ghost_seen_through.back(), 0u);
+  EXPECT_GE(result.frames_to_clear_seen_through, 1);
+  EXPECT_LE(result.frames_to_clear_seen_through, 9);  // OctoMap's update: max / -miss
+}
+
 TEST(DynamicScenes, RejectsBadCases) {
   DynamicSceneCase setup;
   setup.resolution = 0.0;
