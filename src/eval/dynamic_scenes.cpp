@@ -172,16 +172,13 @@ void mapFrame(const DynamicSceneCase& setup, const sim::Scene& scene, int k, dou
   }
 }
 
-// The map's occupied voxels (the laser layer's cells, at z = 0) in the places the object held,
-// grown by a voxel, whose centre lies farther than a voxel diagonal from the corridor's surfaces:
-// what the object left in the map.
-// Whether the sensor at `eye` sees any of a voxel's centre and corners (corners drawn in by a
-// tenth of a voxel, so that one touching a surface counts as seen from the side it faces) past
-// the static scene (the objects left out): what lies hidden behind the static scene cannot be
-// seen free by any sensor.
-// Cells of the laser layer: their centre and corners in the scan plane.
-bool anyPartInSight(const sim::Scene& scene, const Eigen::Vector3d& eye,
-                    const Eigen::Vector3d& centre, double resolution, bool planar) {
+// Whether `seen` holds for a ray of the sensor at `eye` towards any of a voxel's centre and
+// corners (drawn in by a tenth of a voxel, so that one touching a surface counts as seen from the
+// side it faces): seen(unit direction, distance to the point). Cells of the laser layer: their
+// centre and corners in the scan plane.
+template <class Seen>
+bool anyPart(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre, double resolution,
+             bool planar, Seen seen) {
   const double reach = 0.4 * resolution;
   for (int corner = -1; corner < (planar ? 4 : 8); ++corner) {
     Eigen::Vector3d point = centre;
@@ -191,33 +188,38 @@ bool anyPartInSight(const sim::Scene& scene, const Eigen::Vector3d& eye,
     }
     const Eigen::Vector3d offset = point - eye;
     const double distance = offset.norm();
-    if (!scene.castRay(eye, offset / distance, distance)) return true;
+    if (seen(Eigen::Vector3d(offset / distance), distance)) return true;
   }
   return false;
 }
 
-// Whether a ray of the sensor through any part of the cell (as anyPartInSight) returns from the
-// static scene at least kBehind beyond it, within `range`: what lets a measurement say that the
-// cell is free now. A ray without a return, or one ending just behind the cell, says nothing.
+// Whether the sensor sees any part of the voxel past the static scene (the objects left out):
+// what lies hidden behind the static scene cannot be seen free by any sensor.
+bool anyPartInSight(const sim::Scene& scene, const Eigen::Vector3d& eye,
+                    const Eigen::Vector3d& centre, double resolution, bool planar) {
+  return anyPart(eye, centre, resolution, planar,
+                 [&](const Eigen::Vector3d& direction, double distance) {
+                   return !scene.castRay(eye, direction, distance);
+                 });
+}
+
+// Whether a ray of the sensor through any part of the voxel returns from the static scene at
+// least kBehind beyond it, within `range`: what lets a measurement say that the voxel is free
+// now. A ray without a return, or one ending just behind the voxel, says nothing.
 constexpr double kBehind = 0.2;  // m
 bool anyPartSeenThrough(const sim::Scene& scene, const Eigen::Vector3d& eye,
                         const Eigen::Vector3d& centre, double resolution, bool planar,
                         double range) {
-  const double reach = 0.4 * resolution;
-  for (int corner = -1; corner < (planar ? 4 : 8); ++corner) {
-    Eigen::Vector3d point = centre;
-    if (corner >= 0) {
-      point += reach * Eigen::Vector3d(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1,
-                                       planar ? 0 : (corner & 4 ? 1 : -1));
-    }
-    const Eigen::Vector3d offset = point - eye;
-    const double distance = offset.norm();
-    const std::optional<double> hit = scene.castRay(eye, offset / distance, range);
-    if (hit && *hit > distance + kBehind) return true;
-  }
-  return false;
+  return anyPart(eye, centre, resolution, planar,
+                 [&](const Eigen::Vector3d& direction, double distance) {
+                   const std::optional<double> hit = scene.castRay(eye, direction, range);
+                   return hit && *hit > distance + kBehind;
+                 });
 }
 
+// The map's occupied voxels (the laser layer's cells, at z = 0) in the places the object held,
+// grown by a voxel, whose centre lies farther than a voxel diagonal from the corridor's surfaces:
+// what the object left in the map.
 class ObjectRegion {
  public:
   ObjectRegion(const sim::Scene& corridor, const ObjectMotion& motion, double resolution,
