@@ -342,6 +342,33 @@ Eigen::Vector3d voxelCenter(const VoxelIndex& index, double resolution) {
 
 }  // namespace
 
+bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, double v,
+                                         double distance) const {
+  const DistancePyramid& pyramid = frame.pyramid;
+  const int width = pyramid.width(0), height = pyramid.height(0);
+  const int cu = static_cast<int>(std::lround(u)), cv = static_cast<int>(std::lround(v));
+  if (cu < 0 || cv < 0 || cu >= width || cv >= height) return false;
+  const auto beyond = [&](float measured) {
+    return measured - distance > config_.passed_sigmas * model_.sigmaAt(measured);
+  };
+  const float centre = pyramid.at(0, cu, cv);
+  if (!isValidMeasurement(centre) || !beyond(centre)) return false;
+  // The footprint: pixels within a voxel's half diagonal of the centre's projection.
+  const double half_diagonal = 0.5 * std::sqrt(3.0) * frame.resolution;
+  constexpr int kMaxRadius = 8;  // px: only near voxels reach it; those pixels decide alone
+  const int radius =
+      std::min(kMaxRadius, static_cast<int>(std::ceil(frame.camera.fx * half_diagonal / distance)));
+  for (int pv = std::max(cv - radius, 0); pv <= std::min(cv + radius, height - 1); ++pv) {
+    for (int pu = std::max(cu - radius, 0); pu <= std::min(cu + radius, width - 1); ++pu) {
+      const float measured = pyramid.at(0, pu, pv);
+      if (!isValidMeasurement(measured)) continue;
+      const double band = half_diagonal + config_.passed_sigmas * model_.sigmaAt(measured);
+      if (std::abs(measured - distance) <= band) return false;  // something measured there
+    }
+  }
+  return true;
+}
+
 int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,
                                          const VoxelMap& map, float* deltas,
                                          const VoxelMap::VoxelStates* states, bool skip_settled,
@@ -391,12 +418,17 @@ int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const Candidat
           if (distance > block.reach) continue;
           delta = config_.method == DepthMethod::kAndert ? andertLogOdds(frame, u, v, distance)
                                                          : pyramidLogOdds(frame, u, v, distance);
-          if (std::isnan(delta)) continue;
         }
+        // The pyramid's cells keep the nearest measurement of their pixels (Eq. 10-11), so an
+        // occupied voxel beside a nearer surface in the image (a door beside its jamb, seen at a
+        // grazing angle) reads it too, and its update stays short of a free one however many
+        // rays pass it: then the pixels are asked.
         const int linear = VoxelBlock::linearIndex(x, y, z);
-        if (clear_passed && delta <= passed_log_odds_ && states->occupied.test(linear)) {
+        if (clear_passed && states->occupied.test(linear) &&
+            (delta <= passed_log_odds_ || seenThrough(frame, u, v, distance))) {
           delta = passed_miss_log_odds_;
         }
+        if (std::isnan(delta)) continue;
         deltas[linear] = delta;
         ++count;
       }

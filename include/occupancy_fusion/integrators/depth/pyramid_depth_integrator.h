@@ -147,10 +147,15 @@ class PyramidDepthIntegrator {
   // voxelLogOdds for a voxel centre already in the camera frame (pyramid and Andert); NaN: no
   // update.
   float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
+  // clear_passed beside a nearer surface: true when the ray through the voxel's centre (pixel
+  // u, v) ends passed_sigmas beyond it and no ray of its footprint ends within a voxel diagonal
+  // and passed_sigmas of it.
+  bool seenThrough(const DepthFrame& frame, double u, double v, double distance) const;
   // Writes all kVolume increments of one block (NaN: no update); returns how many are not NaN.
   // With the map's voxel states (optional): voxels at its lower clamping bound and nearer than
   // block.free_front get NaN and are counted in *unchanged instead (skip_settled), and with
-  // clear_passed an occupied voxel's update at most passed_log_odds_ becomes the passed miss.
+  // clear_passed an occupied voxel's update at most passed_log_odds_, or one seenThrough, becomes
+  // the passed miss.
   int blockLogOdds(const DepthFrame& frame, const CandidateBlock& block, const VoxelMap& map,
                    float* deltas, const VoxelMap::VoxelStates* states = nullptr,
                    bool skip_settled = false, int* unchanged = nullptr) const;
