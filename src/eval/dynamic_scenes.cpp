@@ -203,18 +203,43 @@ bool anyPartInSight(const sim::Scene& scene, const Eigen::Vector3d& eye,
                  });
 }
 
-// Whether a ray of the sensor through any part of the voxel returns from the static scene at
-// least kBehind beyond it, within `range`: what lets a measurement say that the voxel is free
-// now. A ray without a return, or one ending just behind the voxel, says nothing.
-constexpr double kBehind = 0.2;  // m
+// Whether a ray of the sensor through any part of the voxel returns from the static scene farther
+// behind it than `behind(range of the return)`, within `range`: what lets a measurement say that
+// the voxel is free now. A ray without a return, or one ending within the sensor's own range
+// error of the voxel, says nothing.
+template <class Behind>
 bool anyPartSeenThrough(const sim::Scene& scene, const Eigen::Vector3d& eye,
-                        const Eigen::Vector3d& centre, double resolution, bool planar,
-                        double range) {
+                        const Eigen::Vector3d& centre, double resolution, bool planar, double range,
+                        Behind behind) {
   return anyPart(eye, centre, resolution, planar,
                  [&](const Eigen::Vector3d& direction, double distance) {
                    const std::optional<double> hit = scene.castRay(eye, direction, range);
-                   return hit && *hit > distance + kBehind;
+                   return hit && *hit - distance > behind(*hit);
                  });
+}
+
+// How far behind a voxel a return must lie to pass it clearly: a voxel diagonal and three of
+// the sensor's range sigmas at the return's range (depth images: Eq. 7's sigma; stereo: the
+// disparity noise as range, z^2 sigma_d / (f b); the laser: its range sigma; point clouds: none
+// beyond the voxel, as OctoMap's update).
+double passMargin(const DynamicSceneCase& setup, double range) {
+  double sigma = 0.0;
+  switch (setup.mapper) {
+    case DynamicMapper::kDepth:
+      sigma = setup.mapping.depth.sigma + setup.mapping.depth.sigma_quadratic * range * range;
+      break;
+    case DynamicMapper::kStereoDefault:
+    case DynamicMapper::kStereoTableI:
+    case DynamicMapper::kStereoOctomap:
+      sigma = range * range * setup.disparity_noise_px / (kCamera.fx * kBaseline);
+      break;
+    case DynamicMapper::kLaser:
+      sigma = setup.mapping.laser.model.range_sigma;
+      break;
+    case DynamicMapper::kPointCloud:
+      break;
+  }
+  return std::sqrt(3.0) * setup.resolution + 3.0 * sigma;
 }
 
 // The map's occupied voxels (the laser layer's cells, at z = 0) in the places the object held,
@@ -422,7 +447,7 @@ DynamicSceneResult evaluateDynamicScene(const DynamicSceneCase& setup) {
     const double range = laser ? sim::LaserScanner().range_max : kMaxRange;
     const auto seen_through = [&](const Eigen::Vector3d& point) {
       return anyPartSeenThrough(corridor, sensor.translation(), point, setup.resolution, laser,
-                                range);
+                                range, [&](double hit) { return passMargin(setup, hit); });
     };
     const auto [left, through] = region.count(session, in_view, seen_through);
     if (k < result.change_frame) {

@@ -68,9 +68,10 @@ struct DynamicSceneResult {
   std::vector<std::size_t> ghost;
   std::size_t object_voxels = 0;
   // Of the ghost, per frame, the voxels (cells) the sensor sees through: a ray of it through
-  // the voxel returns from a static surface at least 0.2 m beyond it, within its range. Only
-  // these can be measured free; the rest (behind them only rays without a return, or the
-  // surface within 0.2 m) stays until the sensor moves.
+  // the voxel returns from a static surface beyond it by more than a voxel diagonal and three
+  // of the sensor's range sigmas at that range (stereo: the disparity noise as range), within
+  // its range. Only these can be measured free; the rest (behind them only rays without a
+  // return, or a surface within the sensor's range error) stays until the sensor moves.
   std::vector<std::size_t> ghost_seen_through;
   // Frames without the object (from the change on) after which the ghost (its part seen
   // through) stays below 5 % of object_voxels; -1: not within the frames mapped.
