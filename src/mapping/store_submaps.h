@@ -193,6 +193,12 @@ class StoreSubmaps {
     for (const Record& record : records_) bytes += record.spilled ? 0 : record.bytes;
     return bytes;
   }
+  // Where the spilled records' blocks lie: what stays in memory of them.
+  std::size_t spilledIndexBytes() const {
+    std::size_t bytes = 0;
+    for (const Record& record : records_) bytes += record.spilled ? record.bytes : 0;
+    return bytes;
+  }
 
   // The oldest in-memory records written to `spill` until the records in memory take at most
   // `budget` bytes (the newest stays). Returns the bytes written to it.
@@ -203,19 +209,29 @@ class StoreSubmaps {
     for (std::size_t id = 0; id + 1 < records_.size() && in_memory > budget; ++id) {
       Record& record = records_[id];
       if (record.spilled || record.changes.empty()) continue;
+      // One append a record, its blocks in key order: the index is their keys and ends.
+      std::vector<std::uint64_t> keys;
+      keys.reserve(record.changes.size());
+      for (const auto& entry : record.changes) keys.push_back(entry.first);
+      std::sort(keys.begin(), keys.end());
       std::string bytes;
-      for (const auto& entry : record.changes) {
-        bytes.clear();
-        entry.second.appendPackedTo(&bytes);
-        const std::uint64_t offset = spill->append(bytes);
-        record.slots.emplace(entry.first,
-                             SpillSlot{offset, static_cast<std::uint32_t>(bytes.size())});
-        written += bytes.size();
+      SpilledIndex index;
+      index.ends.reserve(keys.size());
+      for (std::uint64_t key : keys) {
+        record.changes.at(key).appendPackedTo(&bytes);
+        if (bytes.size() > std::numeric_limits<std::uint32_t>::max()) {
+          throw std::runtime_error("submaps: a submap's changes exceed 4 GiB");
+        }
+        index.ends.push_back(static_cast<std::uint32_t>(bytes.size()));
       }
+      index.keys = std::move(keys);
+      index.base = spill->append(bytes);
+      written += bytes.size();
       in_memory -= record.bytes;
       record.changes = SpatialKeyMap<typename Traits::Stored>();
       record.spilled = true;
-      record.bytes = record.slots.size() * (sizeof(SpillSlot) + kTableSlotBytes);
+      record.spilled_index = std::move(index);
+      record.bytes = record.spilled_index.bytes();
     }
     return written;
   }
@@ -415,16 +431,32 @@ class StoreSubmaps {
     const double cell_side;
   };
 
-  // Where a spilled block's changes lie in the spill file.
-  struct SpillSlot {
-    std::uint64_t offset = 0;
-    std::uint32_t size = 0;
+  // Where a spilled record's blocks lie in the spill file: one stretch from `base`, the blocks
+  // in key order, each ending at ends[i] (16 bytes a block, against about 40 in a hash table).
+  struct SpilledIndex {
+    std::uint64_t base = 0;
+    std::vector<std::uint64_t> keys;  // ascending
+    std::vector<std::uint32_t> ends;  // bytes from base
+    std::size_t size() const { return keys.size(); }
+    std::size_t bytes() const {
+      return keys.capacity() * sizeof(std::uint64_t) + ends.capacity() * sizeof(std::uint32_t);
+    }
+    // Block `key`'s offset and size in the file; false: not in the record.
+    bool find(std::uint64_t key, std::uint64_t* offset, std::uint32_t* size) const {
+      const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+      if (it == keys.end() || *it != key) return false;
+      const std::size_t i = static_cast<std::size_t>(it - keys.begin());
+      const std::uint32_t begin = i == 0 ? 0 : ends[i - 1];
+      *offset = base + begin;
+      *size = ends[i] - begin;
+      return true;
+    }
   };
 
   struct Record {
     // In memory, or (spilled) in the spill file with only where each block's changes lie here.
     SpatialKeyMap<typename Traits::Stored> changes;
-    SpatialKeyMap<SpillSlot> slots;
+    SpilledIndex spilled_index;
     bool spilled = false;
     std::size_t bytes = 0;                 // of memory
     Eigen::AlignedBox3d bounds;            // of its blocks, where written
@@ -438,13 +470,13 @@ class StoreSubmaps {
       bounds.extend(containerBox(index, cell_side));
       changes.emplace(Traits::key(index), std::move(stored));
     }
-    std::size_t blockCount() const { return spilled ? slots.size() : changes.size(); }
+    std::size_t blockCount() const { return spilled ? spilled_index.size() : changes.size(); }
   };
 
   template <class Fn>
   static void forEachKey(const Record& record, Fn fn) {
     if (record.spilled) {
-      for (const auto& entry : record.slots) fn(entry.first);
+      for (std::uint64_t key : record.spilled_index.keys) fn(key);
     } else {
       for (const auto& entry : record.changes) fn(entry.first);
     }
@@ -453,10 +485,11 @@ class StoreSubmaps {
   // when the record changed no such block.
   bool storedOf(const Record& record, std::uint64_t key, typename Traits::Stored* out) const {
     if (!record.spilled) return false;
-    auto it = record.slots.find(key);
-    if (it == record.slots.end()) return false;
+    std::uint64_t offset = 0;
+    std::uint32_t size = 0;
+    if (!record.spilled_index.find(key, &offset, &size)) return false;
     thread_local std::string bytes;
-    spill_->read(it->second.offset, it->second.size, &bytes);
+    spill_->read(offset, size, &bytes);
     if (!out->readPacked(bytes)) throw std::runtime_error("submaps: a damaged spill file");
     return true;
   }
@@ -476,10 +509,10 @@ class StoreSubmaps {
       for (const auto& entry : record.changes) fn(entry.first, entry.second);
       return;
     }
-    for (const auto& entry : record.slots) {
+    for (std::uint64_t key : record.spilled_index.keys) {
       typename Traits::Stored stored;
-      storedOf(record, entry.first, &stored);
-      fn(entry.first, stored);
+      storedOf(record, key, &stored);
+      fn(key, stored);
     }
   }
 

@@ -159,10 +159,17 @@ void SubmapFusion::closeActiveLocked(Eigen::Isometry3d next_T_map_odom) {
 
 void SubmapFusion::enforceMemoryBoundLocked() {
   if (config_.max_memory_bytes == 0) return;
+  // What stays in memory whatever is spilled (which submaps reach each block, where spilled
+  // blocks lie, the submap being written) comes first; the closed changes get what it leaves.
+  std::size_t fixed = 0;
+  stores_->forEach([&](const auto& store) {
+    fixed += store.coverageBytes() + store.spilledIndexBytes() + store.activeBytes();
+  });
+  const std::size_t budget =
+      config_.max_memory_bytes > fixed ? config_.max_memory_bytes - fixed : 0;
   const std::size_t tiles = stores_->tiles ? stores_->tiles->inMemoryBytes() : 0;
-  if (stores_->voxels.inMemoryBytes() + tiles <= config_.max_memory_bytes) return;
+  if (stores_->voxels.inMemoryBytes() + tiles <= budget) return;
   if (!spill_) spill_ = std::make_unique<SubmapSpillFile>(config_.spill_folder);
-  const std::size_t budget = config_.max_memory_bytes;
   stores_->voxels.spillOldest(budget > tiles ? budget - tiles : 0, spill_.get());
   if (stores_->tiles) {
     const std::size_t voxels = stores_->voxels.inMemoryBytes();

@@ -44,9 +44,12 @@ struct SubmapFusionConfig {
   // voxel (a laser wall drawn a third of a cell off already lands in other cells: measured on the
   // CARMEN logs, docs/loop_closures.md).
   double min_shift = 0.0;
-  // Bytes of the closed submaps' changes kept in memory (0: all of them): beyond, the oldest
-  // submaps' changes go to a temporary file in spill_folder (empty: the system's temporary
-  // folder) and are read back from it when a correction moves them or what they overlap.
+  // Bytes of the submaps in memory (0: no bound): their indexes (which submaps reach each
+  // block; where spilled blocks lie, 16 bytes a block), the active submap's first sights, and as
+  // much of the closed submaps' changes as those leave; beyond, the oldest submaps' changes go to a
+  // temporary file in spill_folder (empty: the system's temporary folder) and are read back from it
+  // when a correction moves them or what they overlap. The indexes alone may exceed it on a large
+  // map.
   std::size_t max_memory_bytes = 0;
   std::string spill_folder;
 
@@ -160,7 +163,7 @@ class SubmapFusion {
 
   const SubmapFusionConfig& config() const { return config_; }
   double minShift() const { return min_shift_; }  // m, config().min_shift or a quarter voxel
-  std::size_t memoryBytes() const;   // the submaps' changes and the active one's first sights
+  std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
   std::size_t spilledBytes() const;  // written to the spill file (max_memory_bytes) so far
 
   // The submaps as bytes, to be saved beside the map (submap_files.h): the active submap is closed
