@@ -242,6 +242,7 @@ SubmapMoveResult SubmapFusion::place(const Placements& placements,
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   result.moved_seconds = seconds_since();
+  if (result.moved > 0) moves_.fetch_add(1, std::memory_order_release);
   // Then the laser layer's moved submaps drawn again from their scans: its thin walls where a map
   // made at the new placements has them (one submap after another: the slower part).
   if (stores_->tiles && drawer_ != nullptr && !moved.empty()) {

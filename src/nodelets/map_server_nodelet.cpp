@@ -125,8 +125,11 @@ class MapServer : public nodelet::Nodelet {
         map->name().c_str(), sourceName(config.source), config.odom_frame.c_str(),
         config.submap_distance);
     if (config.source != ReanchoringConfig::Source::kPath) return;
+    // On the manager's shared threads, not this nodelet's own queue: a correction takes up to
+    // seconds (its laser scans drawn again), and on that queue it held the publishing timer, so
+    // the re-sampled map waited for the whole correction before it was sent.
     path_subscriber_ =
-        getNodeHandle().subscribe(persistence_.path_topic, 1, &MapServer::onPath, this);
+        getMTNodeHandle().subscribe(persistence_.path_topic, 1, &MapServer::onPath, this);
   }
 
   // The submaps saved beside the loaded map, so that it moves with later corrections; without

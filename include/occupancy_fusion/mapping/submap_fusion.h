@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -163,8 +164,11 @@ class SubmapFusion {
 
   const SubmapFusionConfig& config() const { return config_; }
   double minShift() const { return min_shift_; }  // m, config().min_shift or a quarter voxel
-  std::size_t memoryBytes() const;  // the submaps' changes and the active one's first sights
+  std::size_t memoryBytes() const;   // the submaps' changes and the active one's first sights
   std::size_t spilledBytes() const;  // written to the spill file (max_memory_bytes) so far
+  // Corrections that moved submaps so far, counted once the map holds them re-sampled (before
+  // the laser layer is drawn again): what a publisher watches to send a correction at once.
+  std::uint64_t movesResampled() const { return moves_.load(std::memory_order_acquire); }
 
   // The submaps as bytes, to be saved beside the map (submap_files.h): the active submap is closed
   // first. restore() takes them back once the map and layer hold what was saved with them (their
@@ -225,6 +229,7 @@ class SubmapFusion {
   std::vector<Meta> closed_;                // by id
   Meta active_;  // id closed_.size(); its stamps also change under stamp_mutex_
   mutable std::mutex stamp_mutex_;
+  std::atomic<std::uint64_t> moves_{0};  // movesResampled()
   mutable std::mutex newest_mutex_;
   mutable Eigen::AlignedBox3d newest_bounds_;  // newestBounds()' last
 };

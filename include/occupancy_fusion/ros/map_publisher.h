@@ -116,6 +116,8 @@ class MapPublisher {
   };
 
   void onTimer(const ros::WallTimerEvent& event);
+  std::uint64_t movesResampled() const;  // the map's corrections so far (0: no reanchoring)
+  static constexpr double kCorrectionCheckSeconds = 0.1;
   void publishCycle();
   bool needsSending(const ros::Publisher& publisher, const SentVersion& sent) const;
   SentVersion currentVersion() const;
@@ -150,6 +152,8 @@ class MapPublisher {
   ros::WallTimer timer_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTime next_diagnostics_;  // diagnostics are published once per wall-clock second
+  ros::WallTime next_cycle_;        // the next publishCycle() due by publish_rate
+  std::uint64_t moves_sent_ = 0;    // movesResampled() at the last cycle
   mutable std::mutex grid_timings_mutex_;
   GridTimings grid_timings_;
   std::mutex stop_mutex_;
