@@ -148,8 +148,8 @@ class PyramidDepthIntegrator {
   // update.
   float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
   // clear_passed beside a nearer surface: true when the ray through the voxel's centre (pixel
-  // u, v) ends passed_sigmas beyond it and no ray of its footprint ends within a voxel diagonal
-  // and passed_sigmas of it.
+  // u, v) ends passed_sigmas beyond it and no ray of its footprint ends within half a voxel
+  // diagonal and passed_sigmas of it.
   bool seenThrough(const DepthFrame& frame, double u, double v, double distance) const;
   // Writes all kVolume increments of one block (NaN: no update); returns how many are not NaN.
   // With the map's voxel states (optional): voxels at its lower clamping bound and nearer than
