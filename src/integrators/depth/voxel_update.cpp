@@ -351,22 +351,29 @@ bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, doub
   const auto beyond = [&](float measured) {
     return measured - distance > config_.passed_sigmas * model_.sigmaAt(measured);
   };
+  // Any ray through the voxel itself (the centre pixel, or within half a voxel side of the
+  // centre's projection) may show it passed: the centre pixel alone may have no return (a ray
+  // past a door's edge into an open room) or end on the edge in front.
   const float centre = pyramid.at(0, cu, cv);
-  if (!isValidMeasurement(centre) || !beyond(centre)) return false;
+  const bool centre_returned = isValidMeasurement(centre);
   // The footprint: pixels within a voxel's half diagonal of the centre's projection.
   const double half_diagonal = 0.5 * std::sqrt(3.0) * frame.resolution;
   constexpr int kMaxRadius = 8;  // px: only near voxels reach it; those pixels decide alone
+  const double pixels_per_metre = frame.camera.fx / distance;
   const int radius =
-      std::min(kMaxRadius, static_cast<int>(std::ceil(frame.camera.fx * half_diagonal / distance)));
+      std::min(kMaxRadius, static_cast<int>(std::ceil(pixels_per_metre * half_diagonal)));
+  const double inner = 0.5 * frame.resolution * pixels_per_metre;
+  bool passed = centre_returned && beyond(centre);
   for (int pv = std::max(cv - radius, 0); pv <= std::min(cv + radius, height - 1); ++pv) {
     for (int pu = std::max(cu - radius, 0); pu <= std::min(cu + radius, width - 1); ++pu) {
       const float measured = pyramid.at(0, pu, pv);
       if (!isValidMeasurement(measured)) continue;
       const double band = half_diagonal + config_.passed_sigmas * model_.sigmaAt(measured);
       if (std::abs(measured - distance) <= band) return false;  // something measured there
+      passed = passed || (std::hypot(pu - u, pv - v) <= inner && beyond(measured));
     }
   }
-  return true;
+  return passed;
 }
 
 int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,

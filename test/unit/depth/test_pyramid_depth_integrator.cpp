@@ -315,55 +315,81 @@ TEST(PyramidDepthIntegrator, ClearPassedClearsWhatLeftInFourFrames) {
 }
 
 // clear_passed beside a nearer surface: the left half of the image sees a wall at 1 m, the
-// right half a panel at 2 m (10 frames), then, the panel gone, a wall at 3 m. Pyramid cells of
-// 2 x 2 pixels and more keep the nearest measurement (Eq. 10-11), so the panel's voxels within
-// a cell of the edge read the near wall too, behind which Eq. 7 says nothing: their update is
-// a fraction of a free one, and the passed miss, which needs a whole one, never comes. Their
-// centre pixels see 1 m beyond and no pixel of their footprint ends in them: passed. The near
-// wall, which rays still end on, stays.
-TEST(PyramidDepthIntegrator, ClearPassedClearsWhatLeftBesideANearerSurface) {
+// right half a panel at 2 m (10 frames), then, the panel gone, `without`. Returns the panel's
+// occupied voxels whose centre projects within 3 px right of the edge (32.5) after `frames`
+// frames of `without`, and in *near_wall the near wall's occupied voxels.
+std::size_t panelLeftBesideANearerWall(const std::vector<float>& without, bool clear_passed,
+                                       int frames, std::size_t* near_wall) {
   const CameraIntrinsics camera = smallCamera(64, 48, 50.0);
-  std::vector<float> with_panel(64 * 48), without(64 * 48);
+  std::vector<float> with_panel(64 * 48);
   for (int v = 0; v < 48; ++v) {
-    for (int u = 0; u < 64; ++u) {
-      with_panel[v * 64 + u] = u < 33 ? 1.0f : 2.0f;  // odd: pyramid cells straddle the edge
-      without[v * 64 + u] = u < 33 ? 1.0f : 3.0f;
-    }
+    for (int u = 0; u < 64; ++u) with_panel[v * 64 + u] = u < 33 ? 1.0f : 2.0f;  // odd edge
   }
-  const auto left_after = [&](bool clear_passed, int frames, std::size_t* near_wall) {
-    PyramidDepthConfig config;
-    config.k = 0.05;
-    config.sigma = 0.05;
-    config.clear_passed = clear_passed;
-    const PyramidDepthIntegrator integrator(config);
-    VoxelMapConfig map_config;
-    map_config.resolution = 0.1;  // a voxel covers 2.5 px at 2 m: pyramid layer 1
-    VoxelMap map(map_config);
-    for (int i = 0; i < 10; ++i) {
-      integrator.integrate({64, 48, with_panel.data()}, camera, Eigen::Isometry3d::Identity(),
-                           &map);
-    }
-    for (int i = 0; i < frames; ++i) {
-      integrator.integrate({64, 48, without.data()}, camera, Eigen::Isometry3d::Identity(), &map);
-    }
-    // The panel's occupied voxels whose centre projects within 3 px right of the edge (32.5).
-    std::size_t panel = 0;
-    *near_wall = 0;
-    map.forEachOccupiedVoxel([&](const VoxelIndex& index, float) {
-      const Eigen::Vector3d centre = map.centerOf(index);
-      const double u = camera.project(centre).x();
-      if (centre.z() > 1.85 && centre.z() < 2.15 && u >= 32.5 && u < 35.5) ++panel;
-      if (centre.z() > 0.85 && centre.z() < 1.15 && u < 32.0) ++*near_wall;
-    });
-    return panel;
-  };
+  PyramidDepthConfig config;
+  config.k = 0.05;
+  config.sigma = 0.05;
+  config.clear_passed = clear_passed;
+  const PyramidDepthIntegrator integrator(config);
+  VoxelMapConfig map_config;
+  map_config.resolution = 0.1;  // a voxel covers 2.5 px at 2 m: pyramid layer 1
+  VoxelMap map(map_config);
+  for (int i = 0; i < 10; ++i) {
+    integrator.integrate({64, 48, with_panel.data()}, camera, Eigen::Isometry3d::Identity(), &map);
+  }
+  for (int i = 0; i < frames; ++i) {
+    integrator.integrate({64, 48, without.data()}, camera, Eigen::Isometry3d::Identity(), &map);
+  }
+  std::size_t panel = 0;
+  *near_wall = 0;
+  map.forEachOccupiedVoxel([&](const VoxelIndex& index, float) {
+    const Eigen::Vector3d centre = map.centerOf(index);
+    const double u = camera.project(centre).x();
+    if (centre.z() > 1.85 && centre.z() < 2.15 && u >= 32.5 && u < 35.5) ++panel;
+    if (centre.z() > 0.85 && centre.z() < 1.15 && u < 32.0) ++*near_wall;
+  });
+  return panel;
+}
+
+// Pyramid cells of 2 x 2 pixels and more keep the nearest measurement (Eq. 10-11), so the
+// panel's voxels within a cell of the edge read the near wall too, behind which Eq. 7 says
+// nothing: their update is a fraction of a free one, and the passed miss, which needs a whole
+// one, never comes. Their centre pixels see 1 m beyond and no pixel of their footprint ends in
+// them: passed. The near wall, which rays still end on, stays.
+TEST(PyramidDepthIntegrator, ClearPassedClearsWhatLeftBesideANearerSurface) {
+  std::vector<float> without(64 * 48);
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) without[v * 64 + u] = u < 33 ? 1.0f : 3.0f;
+  }
   std::size_t near_wall = 0;
-  const std::size_t held = left_after(true, 0, &near_wall);
+  const std::size_t held = panelLeftBesideANearerWall(without, true, 0, &near_wall);
   EXPECT_GT(held, 20u);
   const std::size_t near_wall_before = near_wall;
   EXPECT_GT(near_wall_before, 100u);
-  EXPECT_GT(left_after(false, 5, &near_wall), held / 2);  // the paper's update: slow
-  EXPECT_EQ(left_after(true, 5, &near_wall), 0u);
+  EXPECT_GT(panelLeftBesideANearerWall(without, false, 5, &near_wall), held / 2);  // the paper's
+  EXPECT_EQ(panelLeftBesideANearerWall(without, true, 5, &near_wall), 0u);
+  EXPECT_EQ(near_wall, near_wall_before);
+}
+
+// The same panel gone, but behind it every other pixel has no return (a checkerboard, as rays
+// past a door's edge into an open room): many of the edge voxels' centre pixels say nothing, a
+// neighbour within half a voxel side of the centre's projection (1.25 px) sees 1 m beyond. Those
+// rays pass through the voxel itself: passed as well.
+TEST(PyramidDepthIntegrator, ClearPassedAsksTheRaysThroughAVoxelWhoseCentreHasNoReturn) {
+  std::vector<float> without(64 * 48);
+  std::size_t no_return = 0;
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      const bool hole = u >= 33 && (u + v) % 2 == 0;
+      without[v * 64 + u] = u < 33 ? 1.0f : (hole ? kNaN : 3.0f);
+      no_return += hole ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(no_return, 31u * 24u);
+  std::size_t near_wall = 0;
+  const std::size_t held = panelLeftBesideANearerWall(without, true, 0, &near_wall);
+  const std::size_t near_wall_before = near_wall;
+  EXPECT_GT(held, 20u);
+  EXPECT_EQ(panelLeftBesideANearerWall(without, true, 5, &near_wall), 0u);
   EXPECT_EQ(near_wall, near_wall_before);
 }
 
