@@ -448,8 +448,9 @@ const std::vector<Workload>& workloads() {
       {"dynamic",
        "[--events removed_box,person,door,chair] [--mappers depth,stereo,stereo_table_i,\n"
        "      stereo_octomap,point_cloud,laser] [--resolution 0.05,0.1] [--speed 0,0.5]\n"
-       "      [--frames_before N] [--frames_after N] [--noise_px P] [--curves CSV] [--config FILE "
-       "...]\n"
+       "      [--rate_hz R] [--frames_before N] [--frames_after N] [--noise_px P] [--curves CSV]\n"
+       "      [--config FILE ...] (rate_hz: frames a second, default 15 for cameras, 10 for the "
+       "laser)\n"
        "      an object leaves a sensor's view in the simulated corridor (a box taken away, a "
        "person\n"
        "      walking across at 1 m/s, a door opening, a chair moved), the sensor standing or "
@@ -458,8 +459,8 @@ const std::vector<Workload>& workloads() {
        "      ghost voxels (laser cells) it leaves after 1, 3, 5 frames and the frames until "
        "fewer\n"
        "      than 5 % of its voxels are left, the corridor's coverage, ms per frame",
-       {"events", "mappers", "resolution", "speed", "frames_before", "frames_after", "noise_px",
-        "curves", "config"},
+       {"events", "mappers", "resolution", "speed", "rate_hz", "frames_before", "frames_after",
+        "noise_px", "curves", "config"},
        runDynamic},
   };
   return table;

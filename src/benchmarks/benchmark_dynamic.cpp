@@ -48,6 +48,7 @@ int runDynamic(const CommandLine& args) {
   base.frames_before = args.intValue("frames_before", base.frames_before);
   base.frames_after = args.intValue("frames_after", base.frames_after);
   base.disparity_noise_px = args.doubleValue("noise_px", base.disparity_noise_px);
+  base.rate_hz = args.doubleValue("rate_hz", base.rate_hz);
   std::vector<DynamicEvent> events;
   std::vector<DynamicMapper> mappers;
   try {
