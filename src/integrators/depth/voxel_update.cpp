@@ -367,32 +367,56 @@ bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, doub
   const int width = pyramid.width(0), height = pyramid.height(0);
   const int cu = static_cast<int>(std::lround(u)), cv = static_cast<int>(std::lround(v));
   if (cu < 0 || cv < 0 || cu >= width || cv >= height) return false;
+  const double half_diagonal = 0.5 * std::sqrt(3.0) * frame.resolution;
   const auto beyond = [&](float measured) {
     return measured - distance > config_.passed_sigmas * model_.sigmaAt(measured);
   };
-  // Any ray through the voxel itself (the centre pixel, or within half a voxel side of the
-  // centre's projection) may show it passed: the centre pixel alone may have no return (a ray
-  // past a door's edge into an open room) or end on the edge in front.
+  const auto ends_there = [&](float measured) {
+    return std::abs(measured - distance) <=
+           half_diagonal + config_.passed_sigmas * model_.sigmaAt(measured);
+  };
+  // A surface voxel seen again (most calls): its centre pixel ends in it.
   const float centre = pyramid.at(0, cu, cv);
-  const bool centre_returned = isValidMeasurement(centre);
+  if (isValidMeasurement(centre) && ends_there(centre)) return false;
   // The footprint: pixels within a voxel's half diagonal of the centre's projection.
-  const double half_diagonal = 0.5 * std::sqrt(3.0) * frame.resolution;
   constexpr int kMaxRadius = 8;  // px: only near voxels reach it; those pixels decide alone
   const double pixels_per_metre = frame.camera.fx / distance;
   const int radius =
       std::min(kMaxRadius, static_cast<int>(std::ceil(pixels_per_metre * half_diagonal)));
+  const int u_first = std::max(cu - radius, 0), u_last = std::min(cu + radius, width - 1);
+  const int v_first = std::max(cv - radius, 0), v_last = std::min(cv + radius, height - 1);
+  // Any ray through the voxel itself (within half a voxel side of the centre's projection) may
+  // show it passed: the centre pixel alone may have no return (a ray past a door's edge into an
+  // open room) or end on the edge in front. A grid of rays over that disc is asked: 3 x 3 where
+  // the centre ends in front (most calls: a voxel behind a nearer surface), 5 x 5 where it has no
+  // return, so that a call costs at most that many reads before the footprint's.
   const double inner = 0.5 * frame.resolution * pixels_per_metre;
+  const auto passes = [&](double du, double dv) {
+    // Rounded to the nearest pixel (lround is a call into libm): the offset keeps the sum
+    // positive within a footprint's reach of the image, so the truncation floors it.
+    constexpr int kOffset = 64;
+    const int pu = static_cast<int>(u + du + (0.5 + kOffset)) - kOffset;
+    const int pv = static_cast<int>(v + dv + (0.5 + kOffset)) - kOffset;
+    if (pu < u_first || pv < v_first || pu > u_last || pv > v_last) return false;
+    const double du_px = pu - u, dv_px = pv - v;
+    if (du_px * du_px + dv_px * dv_px > inner * inner) return false;  // misses the voxel's disc
+    const float measured = pyramid.at(0, pu, pv);
+    return isValidMeasurement(measured) && beyond(measured) && !ends_there(measured);
+  };
+  const bool centre_returned = isValidMeasurement(centre);
   bool passed = centre_returned && beyond(centre);
-  for (int pv = std::max(cv - radius, 0); pv <= std::min(cv + radius, height - 1); ++pv) {
-    for (int pu = std::max(cu - radius, 0); pu <= std::min(cu + radius, width - 1); ++pu) {
+  const double spacing = 0.7 * inner;  // the grid's corners within the disc
+  for (int j = -1; j <= 1 && !passed; ++j) {
+    for (int i = -1; i <= 1 && !passed; ++i) passed = passes(i * spacing, j * spacing);
+  }
+  if (!passed) return false;
+  for (int pv = v_first; pv <= v_last; ++pv) {
+    for (int pu = u_first; pu <= u_last; ++pu) {
       const float measured = pyramid.at(0, pu, pv);
-      if (!isValidMeasurement(measured)) continue;
-      const double band = half_diagonal + config_.passed_sigmas * model_.sigmaAt(measured);
-      if (std::abs(measured - distance) <= band) return false;  // something measured there
-      passed = passed || (std::hypot(pu - u, pv - v) <= inner && beyond(measured));
+      if (isValidMeasurement(measured) && ends_there(measured)) return false;  // measured there
     }
   }
-  return passed;
+  return true;
 }
 
 int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const CandidateBlock& block,

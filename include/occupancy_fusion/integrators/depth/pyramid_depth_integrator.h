@@ -153,9 +153,9 @@ class PyramidDepthIntegrator {
   // update.
   float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
   // clear_passed beside a nearer surface: true when a ray through the voxel (the centre pixel
-  // u, v, or one within half a voxel side of it) ends passed_sigmas beyond it and no ray of its
-  // footprint (within half a voxel diagonal) ends within half a voxel diagonal and passed_sigmas
-  // of it.
+  // u, v, or one of a 3 x 3 grid within half a voxel side of it) ends passed_sigmas beyond it and
+  // no ray of its footprint (within half a voxel diagonal) ends within half a voxel diagonal and
+  // passed_sigmas of it.
   bool seenThrough(const DepthFrame& frame, double u, double v, double distance) const;
   // Writes all kVolume increments of one block (NaN: no update); returns how many are not NaN.
   // With the map's voxel states (optional): voxels at its lower clamping bound and nearer than
