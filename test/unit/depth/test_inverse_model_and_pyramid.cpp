@@ -125,6 +125,13 @@ std::vector<float> mixedDepthImage() {
           6.0f, 1.85f, kNaN,  0.0f};  //
 }
 
+// The mixed image's pyramid with t0 = 40 m (t1 = 20, t2 = 10), max_range 20 m and `reach`.
+DistancePyramid mixedPyramid(const MeasurementReach& reach) {
+  const std::vector<float> depth = mixedDepthImage();
+  return DistancePyramid({4, 4, depth.data()}, flatCamera(4, 4), 40.0, 3, 20.0,
+                         PyramidSelection::kClosestToThreshold, &reach);
+}
+
 TEST(DistancePyramid, Eq10KeepsTheMeasurementClosestToEachLayersDistance) {
   // t0 = 8 so t1 = 4 and t2 = 2.
   const std::vector<float> depth = mixedDepthImage();
@@ -177,11 +184,8 @@ TEST(DistancePyramid, LayersFinerThanAnyInformedVoxelReadsAreLeftInvalid) {
 }
 
 TEST(DistancePyramid, ReachOfSquareBoundsTheFourCellsAroundEachPosition) {
-  const std::vector<float> depth = mixedDepthImage();
-  const DepthImageView view{4, 4, depth.data()};
   const MeasurementReach reach{0.1, 0.02, 3.0};  // reach(9 m) = 9 + 3 (0.1 + 1.62) in (t_2, t_1]
-  const DistancePyramid pyramid(view, flatCamera(4, 4), 40.0, 3, 20.0,
-                                PyramidSelection::kClosestToThreshold, &reach);
+  const DistancePyramid pyramid = mixedPyramid(reach);
   // Layer 0 is read by no informed voxel: no table, no bound.
   EXPECT_EQ(pyramid.reachOfSquare(0, 1, 1), std::numeric_limits<float>::infinity());
   for (int level = 1; level < pyramid.levels(); ++level) {
@@ -218,11 +222,7 @@ TEST(DistancePyramid, ReachOfSquareBoundsTheFourCellsAroundEachPosition) {
 }
 
 TEST(DistancePyramid, NearestOfSquareIsTheNearestOfTheFourCellsAroundEachPosition) {
-  const std::vector<float> depth = mixedDepthImage();
-  const DepthImageView view{4, 4, depth.data()};
-  const MeasurementReach reach{0.1, 0.02, 3.0};
-  const DistancePyramid pyramid(view, flatCamera(4, 4), 40.0, 3, 20.0,
-                                PyramidSelection::kClosestToThreshold, &reach);
+  const DistancePyramid pyramid = mixedPyramid({0.1, 0.02, 3.0});
   constexpr float kInf = std::numeric_limits<float>::infinity();
   EXPECT_EQ(pyramid.nearestOfSquare(0, 1, 1), -kInf);  // no table: never far in front
   for (int level = 1; level < pyramid.levels(); ++level) {
