@@ -393,6 +393,66 @@ TEST(PyramidDepthIntegrator, ClearPassedAsksTheRaysThroughAVoxelWhoseCentreHasNo
   EXPECT_EQ(near_wall, near_wall_before);
 }
 
+// Only rays through the voxel count: a wall at 2 m mapped, then a checkerboard in front of it
+// (1.5 m) and behind it (3 m). With 0.02 m voxels a voxel's disc (half its side, 0.25 px at 2 m)
+// holds one pixel or two: a voxel whose disc holds only pixels in front of it is never passed,
+// though a pixel beside its disc sees 1 m beyond; one whose disc holds a pixel beyond is.
+TEST(PyramidDepthIntegrator, ClearPassedAsksOnlyTheRaysThroughTheVoxel) {
+  const CameraIntrinsics camera = smallCamera(64, 48, 50.0);
+  PyramidDepthConfig config;
+  config.k = 0.05;
+  config.sigma = 0.05;
+  config.clear_passed = true;
+  const PyramidDepthIntegrator integrator(config);
+  // Off the voxel grid by a fraction of a pixel, so that the voxels' centres fall anywhere
+  // between pixels.
+  const Eigen::Isometry3d pose(Eigen::Translation3d(0.0037, 0.0061, 0.0));
+  const Eigen::Isometry3d from_map = pose.inverse();
+  VoxelMapConfig map_config;
+  map_config.resolution = 0.02;
+  VoxelMap map(map_config);
+  const std::vector<float> wall(64 * 48, 2.0f);
+  std::vector<float> checkerboard(64 * 48);
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) checkerboard[v * 64 + u] = (u + v) % 2 == 0 ? 1.5f : 3.0f;
+  }
+  for (int i = 0; i < 10; ++i) {
+    integrator.integrate({64, 48, wall.data()}, camera, pose, &map);
+  }
+  std::vector<VoxelIndex> held;
+  map.forEachOccupiedVoxel([&](const VoxelIndex& index, float) {
+    const Eigen::Vector3d centre = map.centerOf(index);
+    const Eigen::Vector2d uv = camera.project(from_map * centre);
+    const bool near_axis = std::abs(uv.x() - camera.cx) < 8 && std::abs(uv.y() - camera.cy) < 8;
+    if (std::abs(centre.z() - 2.0) < 0.03 && near_axis) held.push_back(index);
+  });
+  ASSERT_GT(held.size(), 200u);
+  for (int i = 0; i < 5; ++i) {
+    integrator.integrate({64, 48, checkerboard.data()}, camera, pose, &map);
+  }
+  std::size_t in_front_only = 0, in_front_only_cleared = 0, beyond = 0, beyond_cleared = 0;
+  for (const VoxelIndex& index : held) {
+    const Eigen::Vector3d centre = map.centerOf(index);
+    const Eigen::Vector2d uv = camera.project(from_map * centre);
+    const double inner = 0.5 * map_config.resolution * camera.fx / centre.z();
+    // Independently: whether a pixel behind the voxel (odd u + v) lies in its disc.
+    bool sees_beyond = (std::lround(uv.x()) + std::lround(uv.y())) % 2 == 1;
+    for (int pv = static_cast<int>(uv.y()) - 1; pv <= static_cast<int>(uv.y()) + 2; ++pv) {
+      for (int pu = static_cast<int>(uv.x()) - 1; pu <= static_cast<int>(uv.x()) + 2; ++pu) {
+        const bool in_disc = std::hypot(pu - uv.x(), pv - uv.y()) <= inner;
+        sees_beyond = sees_beyond || (in_disc && (pu + pv) % 2 == 1);
+      }
+    }
+    const bool cleared = !(*map.logOdds(index) > 0.0f);
+    (sees_beyond ? beyond : in_front_only) += 1;
+    (sees_beyond ? beyond_cleared : in_front_only_cleared) += cleared ? 1 : 0;
+  }
+  EXPECT_GT(in_front_only, 50u);
+  EXPECT_EQ(in_front_only_cleared, 0u);
+  EXPECT_GT(beyond, 50u);
+  EXPECT_EQ(beyond_cleared, beyond);
+}
+
 TEST_P(WallTest, InvalidPixelsChangeNothing) {
   // 0, NaN and beyond max_range (10 m) everywhere: no block allocated, a prior value untouched.
   std::vector<float> depth(64 * 48, 0.0f);
