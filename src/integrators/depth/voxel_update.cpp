@@ -387,13 +387,14 @@ bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, doub
   const int v_first = std::max(cv - radius, 0), v_last = std::min(cv + radius, height - 1);
   // Any ray through the voxel itself (within half a voxel side of the centre's projection) may
   // show it passed: the centre pixel alone may have no return (a ray past a door's edge into an
-  // open room) or end on the edge in front. A grid of rays over that disc is asked: 3 x 3 where
-  // the centre ends in front (most calls: a voxel behind a nearer surface), 5 x 5 where it has no
-  // return, so that a call costs at most that many reads before the footprint's.
+  // open room) or end on the edge in front. A 3 x 3 grid of rays over that disc is asked, so that
+  // a voxel the frame does not see through (most calls: one behind a nearer surface) costs nine
+  // reads, not its footprint's.
   const double inner = 0.5 * frame.resolution * pixels_per_metre;
   const auto passes = [&](double du, double dv) {
     // Rounded to the nearest pixel (lround is a call into libm): the offset keeps the sum
-    // positive within a footprint's reach of the image, so the truncation floors it.
+    // positive near the image, so the truncation floors it; farther off, the pixel lands outside
+    // the footprint either way.
     constexpr int kOffset = 64;
     const int pu = static_cast<int>(u + du + (0.5 + kOffset)) - kOffset;
     const int pv = static_cast<int>(v + dv + (0.5 + kOffset)) - kOffset;
