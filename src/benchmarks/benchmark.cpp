@@ -53,6 +53,7 @@ namespace {
 using bench::Clock;
 using bench::median;
 using bench::millisecondsSince;
+using bench::processCpuMilliseconds;
 
 int positiveInt(const CommandLine& args, const std::string& option, int fallback) {
   const int value = args.intValue(option, fallback);
@@ -102,6 +103,7 @@ struct RunResult {
   double ms_per_cloud = 0.0;         // mean, the first cloud's allocations included
   double median_ms_per_cloud = 0.0;  // the peers' statistic (bench::runPeers)
   std::size_t memory_bytes = 0;
+  double cpu_ms_per_cloud = 0.0;  // the process's CPU (every thread) over the run, per cloud
 };
 
 RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, double max_range,
@@ -114,20 +116,23 @@ RunResult runOurs(const std::vector<SensorCloud>& clouds, double resolution, dou
   config.discretize = discretize;
   const PointCloudIntegrator integrator(config);
   std::vector<double> ms;
+  const double cpu_start = processCpuMilliseconds();
   for (const SensorCloud& cloud : clouds) {
     const auto start = Clock::now();
     integrator.integrate(cloud.points, cloud.origin, &map);
     ms.push_back(millisecondsSince(start));
   }
+  const double cpu_ms = (processCpuMilliseconds() - cpu_start) / clouds.size();
   double total = 0.0;
   for (double m : ms) total += m;
-  return {total / clouds.size(), median(ms), map.memoryBytes()};
+  return {total / clouds.size(), median(ms), map.memoryBytes(), cpu_ms};
 }
 
 RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                      const std::vector<SensorCloud>& sources, double resolution, double max_range,
                      bool discretize) {
   octomap::OcTree tree = bench::makeOctomapTree(resolution);
+  const double cpu_start = processCpuMilliseconds();
   const auto start = Clock::now();
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     const Eigen::Vector3d& o = sources[i].origin;
@@ -135,7 +140,8 @@ RunResult runOctomap(const std::vector<octomap::Pointcloud>& clouds,
                           discretize);
   }
   const double mean = millisecondsSince(start) / clouds.size();
-  return {mean, mean, tree.memoryUsage()};
+  return {mean, mean, tree.memoryUsage(),
+          (processCpuMilliseconds() - cpu_start) / static_cast<double>(clouds.size())};
 }
 
 int runPointCloud(const CommandLine& args) {
@@ -165,7 +171,7 @@ int runPointCloud(const CommandLine& args) {
       peer_origins.push_back(cloud.origin);
     }
     for (double resolution : resolutions) {
-      std::vector<double> ours_ms, ours_cloud_ms, octomap_ms;
+      std::vector<double> ours_ms, ours_cloud_ms, octomap_ms, ours_cpu_ms, octomap_cpu_ms;
       RunResult ours, theirs;
       for (int r = 0; r < repetitions; ++r) {
         // OctoMap's insertPointCloud (compiled here from its headers) sets the OpenMP thread
@@ -176,6 +182,8 @@ int runPointCloud(const CommandLine& args) {
         ours_ms.push_back(ours.ms_per_cloud);
         ours_cloud_ms.push_back(ours.median_ms_per_cloud);
         octomap_ms.push_back(theirs.ms_per_cloud);
+        ours_cpu_ms.push_back(ours.cpu_ms_per_cloud);
+        octomap_cpu_ms.push_back(theirs.cpu_ms_per_cloud);
       }
       const double ours_median = median(ours_ms);
       // Against the peers, their statistic: the median cloud (no map allocations in it).
@@ -212,11 +220,12 @@ int runPointCloud(const CommandLine& args) {
       std::printf(
           "pointcloud resolution=%g points=%zu ms_per_cloud=%.3f median_cloud_ms=%.3f "
           "octomap_ms_per_cloud=%.3f time_ratio=%.3f memory_ratio=%.3f threads=%d "
-          "discretize=%d%s\n",
+          "discretize=%d cpu_ms_per_cloud=%.3f octomap_cpu_ms_per_cloud=%.3f%s\n",
           resolution, total_points / clouds.size(), ours_median, ours_cloud_median, octomap_median,
           ours_median / octomap_median,
           static_cast<double>(ours.memory_bytes) / static_cast<double>(theirs.memory_bytes),
-          threads, discretize ? 1 : 0, peer_fields.c_str());
+          threads, discretize ? 1 : 0, median(ours_cpu_ms), median(octomap_cpu_ms),
+          peer_fields.c_str());
       std::fflush(stdout);
     }
   }
