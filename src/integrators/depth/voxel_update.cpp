@@ -473,10 +473,12 @@ int PyramidDepthIntegrator::blockLogOdds(const DepthFrame& frame, const Candidat
         // The pyramid's cells keep the nearest measurement of their pixels (Eq. 10-11), so an
         // occupied voxel beside a nearer surface in the image (a door beside its jamb, seen at a
         // grazing angle) reads it too, and its update stays short of a free one however many
-        // rays pass it: then the pixels are asked.
+        // rays pass it: then the pixels are asked. Not where the update itself is occupied
+        // evidence (a surface seen again, four in five of the occupied voxels in view).
         const int linear = VoxelBlock::linearIndex(x, y, z);
+        const bool ask_pixels = !(delta > 0.0f);  // NaN (no update) included
         if (clear_passed && states->occupied.test(linear) &&
-            (delta <= passed_log_odds_ || seenThrough(frame, u, v, distance))) {
+            (delta <= passed_log_odds_ || (ask_pixels && seenThrough(frame, u, v, distance)))) {
           delta = passed_miss_log_odds_;
         }
         if (std::isnan(delta)) continue;
