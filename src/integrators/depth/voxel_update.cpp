@@ -392,12 +392,8 @@ bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, doub
   // reads, not its footprint's.
   const double inner = 0.5 * frame.resolution * pixels_per_metre;
   const auto passes = [&](double du, double dv) {
-    // Rounded to the nearest pixel (lround is a call into libm): the offset keeps the sum
-    // positive near the image, so the truncation floors it; farther off, the pixel lands outside
-    // the footprint either way.
-    constexpr int kOffset = 64;
-    const int pu = static_cast<int>(u + du + (0.5 + kOffset)) - kOffset;
-    const int pv = static_cast<int>(v + dv + (0.5 + kOffset)) - kOffset;
+    const int pu = floorToInt(u + du + 0.5);  // the nearest pixel (lround calls into libm)
+    const int pv = floorToInt(v + dv + 0.5);
     if (pu < u_first || pv < v_first || pu > u_last || pv > v_last) return false;
     const double du_px = pu - u, dv_px = pv - v;
     if (du_px * du_px + dv_px * dv_px > inner * inner) return false;  // misses the voxel's disc
