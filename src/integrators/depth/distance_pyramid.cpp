@@ -239,7 +239,7 @@ std::vector<float> takeLayerBuffer(std::size_t size) {
 
 DistancePyramid::~DistancePyramid() {
   std::vector<std::vector<float>>& spare = spareLayers();
-  for (std::vector<Layer>* layers : {&layers_, &squares_, &nearest_squares_}) {
+  for (std::vector<Layer>* layers : {&layers_, &squares_}) {
     for (Layer& layer : *layers) {
       if (layer.cells.capacity() > 0 && spare.size() < kMaxSpareLayers) {
         spare.push_back(std::move(layer.cells));
@@ -255,8 +255,7 @@ DistancePyramid::DistancePyramid(const DepthImageView& depth, const CameraIntrin
       scales_(thresholds_.size()),
       inverse_gaps_(thresholds_.size(), 0.0),
       layers_(thresholds_.size()),
-      squares_(thresholds_.size()),
-      nearest_squares_(thresholds_.size()) {
+      squares_(thresholds_.size()) {
   for (std::size_t level = 0; level < thresholds_.size(); ++level) {
     thresholds_[level] = t0 / static_cast<double>(1 << level);
     scales_[level] = 1.0 / static_cast<double>(1 << level);
@@ -322,22 +321,17 @@ void DistancePyramid::buildSquareReaches(int first_level, const MeasurementReach
   for (int level = std::max(first_level, 0); level < levels(); ++level) {
     const Layer& layer = layers_[level];
     Layer& squares = squares_[level];
-    Layer& nearest_squares = nearest_squares_[level];
-    squares.width = nearest_squares.width = layer.width + 1;
-    squares.height = nearest_squares.height = layer.height + 1;
+    squares.width = layer.width + 1;
+    squares.height = layer.height + 1;
     const std::size_t size = static_cast<std::size_t>(squares.width) * squares.height;
     squares.cells = takeLayerBuffer(size);
     squares.cells.resize(size);  // every cell is written below
-    nearest_squares.cells = takeLayerBuffer(size);
-    nearest_squares.cells.resize(size);
     const bool parallel = static_cast<long>(size) >= kParallelPixels;
 #pragma omp parallel if (parallel)
     {
-      // Row r of the tables covers the layer's rows r - 1 and r: their larger (smaller) value per
-      // column, then the larger (smaller) of two neighbouring columns. NaN never compares larger
-      // or smaller; -inf (+inf) pads.
-      std::vector<float> farthest(static_cast<std::size_t>(layer.width) + 2, -kInfinity);
-      std::vector<float> nearest(farthest.size(), kInfinity);
+      // Row r of the table covers the layer's rows r - 1 and r: their larger value per column,
+      // then the larger of two neighbouring columns. NaN never compares larger; -inf pads.
+      std::vector<float> columns(static_cast<std::size_t>(layer.width) + 2, -kInfinity);
 #pragma omp for schedule(static)
       for (int r = 0; r < squares.height; ++r) {
         const float* above =
@@ -345,20 +339,14 @@ void DistancePyramid::buildSquareReaches(int first_level, const MeasurementReach
         const float* below =
             r < layer.height ? &layer.cells[static_cast<std::size_t>(r) * layer.width] : nullptr;
         for (int u = 0; u < layer.width; ++u) {
-          float most = -kInfinity, least = kInfinity;
-          for (const float* row : {above, below}) {
-            if (row == nullptr) continue;
-            most = row[u] > most ? row[u] : most;
-            least = row[u] < least ? row[u] : least;
-          }
-          farthest[u + 1] = most;
-          nearest[u + 1] = least;
+          float farthest = -kInfinity;
+          if (above != nullptr) farthest = above[u] > farthest ? above[u] : farthest;
+          if (below != nullptr) farthest = below[u] > farthest ? below[u] : farthest;
+          columns[u + 1] = farthest;
         }
-        float* reaches = &squares.cells[static_cast<std::size_t>(r) * squares.width];
-        float* nearests = &nearest_squares.cells[static_cast<std::size_t>(r) * squares.width];
+        float* row = &squares.cells[static_cast<std::size_t>(r) * squares.width];
         for (int c = 0; c < squares.width; ++c) {
-          reaches[c] = reachAtLeast(reach, std::max(farthest[c], farthest[c + 1]));
-          nearests[c] = std::min(nearest[c], nearest[c + 1]);
+          row[c] = reachAtLeast(reach, std::max(columns[c], columns[c + 1]));
         }
       }
     }

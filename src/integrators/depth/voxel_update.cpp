@@ -91,19 +91,6 @@ inline bool PyramidDepthIntegrator::layerMayInform(const DepthFrame& frame,
   return distance <= frame.pyramid.reachOfSquare(position.level, position.u0, position.v0);
 }
 
-inline bool PyramidDepthIntegrator::farInFrontOfSquare(const DepthFrame& frame,
-                                                       const LayerPosition& position,
-                                                       double distance, bool or_none) const {
-  // Eq. 15 weighs all four cells (none of fu, fv is 0 or 1 exactly): their nearest valid one is
-  // the nearest of the square, and farInFront of it gives what gatherCells' nearest would.
-  const bool all_weighed =
-      position.fu > 0.0 && position.fu < 1.0 && position.fv > 0.0 && position.fv < 1.0;
-  if (!all_weighed) return false;
-  const float nearest = frame.pyramid.nearestOfSquare(position.level, position.u0, position.v0);
-  if (or_none && nearest == std::numeric_limits<float>::infinity()) return true;
-  return farInFront(distance, nearest) && nearest != std::numeric_limits<float>::infinity();
-}
-
 inline PyramidDepthIntegrator::LayerCells PyramidDepthIntegrator::gatherCells(
     const DepthFrame& frame, const LayerPosition& position, double distance) const {
   const DistancePyramid& pyramid = frame.pyramid;
@@ -160,7 +147,6 @@ inline float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, dou
   if (level < 0 || level + 1 >= pyramid.levels()) {
     const LayerPosition position = layerPosition(frame, std::max(level, 0), u, v);
     if (!layerMayInform(frame, position, distance)) return kNaN;
-    if (farInFrontOfSquare(frame, position, distance)) return model_.farInFrontLogOdds();
     const LayerCells only = gatherCells(frame, position, distance);
     if (!only.valid() || !only.informs) return kNaN;
     if (farInFront(distance, only.nearest)) return model_.farInFrontLogOdds();
@@ -172,11 +158,6 @@ inline float PyramidDepthIntegrator::pyramidLogOdds(const DepthFrame& frame, dou
   if (!layerMayInform(frame, fine_position, distance) &&
       !layerMayInform(frame, coarse_position, distance)) {
     return kNaN;
-  }
-  // In front of the surfaces both layers see (two in five voxels at 0.02 m): no gathers either.
-  if (farInFrontOfSquare(frame, fine_position, distance) &&
-      farInFrontOfSquare(frame, coarse_position, distance, true)) {
-    return model_.farInFrontLogOdds();
   }
   const LayerCells fine = gatherCells(frame, fine_position, distance);
   const LayerCells coarse = gatherCells(frame, coarse_position, distance);

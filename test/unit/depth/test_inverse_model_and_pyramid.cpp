@@ -221,31 +221,6 @@ TEST(DistancePyramid, ReachOfSquareBoundsTheFourCellsAroundEachPosition) {
   EXPECT_NEAR(pyramid.reachOfSquare(1, 0, 0), reach.of(9.0), 1e-5);
 }
 
-TEST(DistancePyramid, NearestOfSquareIsTheNearestOfTheFourCellsAroundEachPosition) {
-  const DistancePyramid pyramid = mixedPyramid({0.1, 0.02, 3.0});
-  constexpr float kInf = std::numeric_limits<float>::infinity();
-  EXPECT_EQ(pyramid.nearestOfSquare(0, 1, 1), -kInf);  // no table: never far in front
-  for (int level = 1; level < pyramid.levels(); ++level) {
-    for (int v = -1; v < pyramid.height(level); ++v) {
-      for (int u = -1; u < pyramid.width(level); ++u) {
-        float nearest = kInf;  // independently, over the valid cells inside the layer
-        for (int cv = std::max(v, 0); cv <= std::min(v + 1, pyramid.height(level) - 1); ++cv) {
-          for (int cu = std::max(u, 0); cu <= std::min(u + 1, pyramid.width(level) - 1); ++cu) {
-            const float cell = pyramid.at(level, cu, cv);
-            if (!std::isnan(cell)) nearest = std::min(nearest, cell);
-          }
-        }
-        SCOPED_TRACE(testing::Message() << "level " << level << " u " << u << " v " << v);
-        EXPECT_EQ(pyramid.nearestOfSquare(level, u, v), nearest);
-      }
-    }
-  }
-  // Layer 1 is [[5, 7], [9, none]].
-  EXPECT_EQ(pyramid.nearestOfSquare(1, 1, 1), kInf);
-  EXPECT_EQ(pyramid.nearestOfSquare(1, 0, 0), 5.0f);
-  EXPECT_EQ(pyramid.nearestOfSquare(1, 0, 1), 9.0f);
-}
-
 TEST(DistancePyramid, LevelCountStopsAtMinRangeOrOneCell) {
   CameraIntrinsics camera;  // 640 x 480
   // t0 = 40 m, min_range 0.1 m: t_9 = 0.078 m is the first t_i <= 0.1 m, and cells of

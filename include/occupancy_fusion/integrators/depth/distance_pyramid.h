@@ -66,14 +66,6 @@ class DistancePyramid {
     if (squares.cells.empty()) return kNoBound;
     return squares.cells[static_cast<std::size_t>(v + 1) * squares.width + (u + 1)];
   }
-  // The nearest valid cell among the same four cells, from the same layers' tables: a voxel far
-  // in front of it is far in front of every cell Eq. 15 weighs for it. +inf where none is valid;
-  // -inf where the layer has no table.
-  float nearestOfSquare(int level, int u, int v) const {
-    const Layer& squares = nearest_squares_[level];
-    if (squares.cells.empty()) return -kNoBound;
-    return squares.cells[static_cast<std::size_t>(v + 1) * squares.width + (u + 1)];
-  }
 
  private:
   struct Layer {
@@ -87,7 +79,7 @@ class DistancePyramid {
   int firstReadLevel(const MeasurementReach* reach) const;
   // Eq. 10: fine layers scanned, coarse ones from distance buckets.
   void buildClosestLayers(int first_read_level);
-  // reachOfSquare's and nearestOfSquare's tables for the layers from first_level on.
+  // reachOfSquare's tables for the layers from first_level on.
   void buildSquareReaches(int first_level, const MeasurementReach& reach);
   void fillBuckets(int level, DistanceBuckets* buckets) const;
   void takeClosest(const DistanceBuckets& buckets, int level);
@@ -100,9 +92,8 @@ class DistancePyramid {
   std::vector<double> thresholds_;  // t_i per layer, read for every voxel
   std::vector<double> scales_;      // 2^-i per layer, read for every voxel
   std::vector<double> inverse_gaps_;
-  std::vector<Layer> layers_;           // layers_[0] is M itself
-  std::vector<Layer> squares_;          // per layer: (width + 1) x (height + 1), or empty
-  std::vector<Layer> nearest_squares_;  // the same, nearestOfSquare's
+  std::vector<Layer> layers_;   // layers_[0] is M itself
+  std::vector<Layer> squares_;  // per layer: (width + 1) x (height + 1), or empty
   static constexpr float kNoBound = __builtin_huge_valf();
   float farthest_ = 0.0f;  // the farthest valid distance of M; 0: none valid
 };

@@ -144,11 +144,6 @@ class PyramidDepthIntegrator {
   bool farInFront(double distance, float nearest) const {
     return !table_.empty() && (distance - nearest) * inverse_sigma_ <= -table_.limit();
   }
-  // farInFront of every cell Eq. 15 weighs at the position, read from the pyramid's table of
-  // each square's nearest cell without gathering them (false where it cannot tell: a weight of 0,
-  // no table, or no valid cell; or_none: true as well where no cell of the square is valid).
-  bool farInFrontOfSquare(const DepthFrame& frame, const LayerPosition& position, double distance,
-                          bool or_none = false) const;
   // voxelLogOdds for a voxel centre already in the camera frame (pyramid and Andert); NaN: no
   // update.
   float projectedLogOdds(const DepthFrame& frame, const Eigen::Vector3d& point) const;
