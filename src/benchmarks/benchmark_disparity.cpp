@@ -118,6 +118,8 @@ struct MapRun {
   std::size_t points_per_frame = 0;
   double voxel_visits_per_frame = 0.0;  // voxel steps of all rays (ours only)
   double rays_per_frame = 0.0;          // rays cast (ours only; fewer than points when bundled)
+  // Ours only: wall ms a frame by stage (StereoIntegrationStats).
+  double conversion_ms = 0.0, bundling_ms = 0.0, walk_ms = 0.0, write_ms = 0.0;
 };
 
 // P(O) of never-observed neighbours in Eq. 1 (--unknown_neighbour_occupancy); the core's default.
@@ -161,6 +163,10 @@ MapRun runOurs(const StereoView& view, const std::vector<Eigen::Isometry3d>& pos
     hits += stats.cache_hits;
     rays += stats.rays;
     run.points_per_frame = stats.points - stats.skipped_points;
+    run.conversion_ms += 1e3 * stats.conversion_seconds / poses.size();
+    run.bundling_ms += 1e3 * stats.bundling_seconds / poses.size();
+    run.walk_ms += 1e3 * stats.walk_seconds / poses.size();
+    run.write_ms += 1e3 * stats.write_seconds / poses.size();
   }
   run.wall_ms_per_frame = millisecondsSince(start) / poses.size();
   run.cpu_ms_per_frame = (processCpuMilliseconds() - cpu_start) / poses.size();
@@ -212,7 +218,29 @@ MapRun runOctomap(const std::vector<octomap::Pointcloud>& clouds,
 struct WalkOnly {
   double cpu_ms_per_frame = 0.0;
   double steps_per_frame = 0.0;
+  // The same for one ray per end voxel, to its farthest point (the default's bundled rays): the
+  // floor of a method that walks them, as Eq. 3 does.
+  double bundled_cpu_ms_per_frame = 0.0;
+  double bundled_steps_per_frame = 0.0;
 };
+
+// The farthest point of each end voxel's points, by the voxel's first point.
+std::vector<Eigen::Vector3d> farthestOfEndVoxels(const octomap::Pointcloud& cloud,
+                                                 const Eigen::Vector3d& origin, double resolution) {
+  std::vector<Eigen::Vector3d> farthest;
+  SpatialKeyMap<std::size_t> of_voxel;
+  for (const octomap::point3d& p : cloud) {
+    const Eigen::Vector3d point(p.x(), p.y(), p.z());
+    const VoxelIndex voxel = (point / resolution).array().floor().cast<int>();
+    const auto [it, inserted] = of_voxel.try_emplace(packKey(voxel), farthest.size());
+    if (inserted) {
+      farthest.push_back(point);
+    } else if ((point - origin).squaredNorm() > (farthest[it->second] - origin).squaredNorm()) {
+      farthest[it->second] = point;
+    }
+  }
+  return farthest;
+}
 
 WalkOnly timeWalkOnly(const std::vector<octomap::Pointcloud>& clouds,
                       const std::vector<Eigen::Isometry3d>& poses, double resolution) {
@@ -228,6 +256,20 @@ WalkOnly timeWalkOnly(const std::vector<octomap::Pointcloud>& clouds,
   WalkOnly walk;
   walk.cpu_ms_per_frame = (processCpuMilliseconds() - cpu_start) / clouds.size();
   walk.steps_per_frame = static_cast<double>(steps) / clouds.size();
+  std::vector<std::vector<Eigen::Vector3d>> ends;
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    ends.push_back(farthestOfEndVoxels(clouds[i], poses[i].translation(), resolution));
+  }
+  steps = 0;
+  const double bundled_start = processCpuMilliseconds();
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    for (const Eigen::Vector3d& end : ends[i]) {
+      RayTraversal ray(poses[i].translation(), end, resolution);
+      for (++steps; ray.beforeEnd(); ++steps) ray.stepTowardsEnd();
+    }
+  }
+  walk.bundled_cpu_ms_per_frame = (processCpuMilliseconds() - bundled_start) / clouds.size();
+  walk.bundled_steps_per_frame = static_cast<double>(steps) / clouds.size();
   return walk;
 }
 
@@ -460,6 +502,10 @@ MapRun perFrameMean(const std::vector<MapRun>& frames) {
     mean.cpu_ms_per_frame += f.cpu_ms_per_frame / frames.size();
     mean.voxel_visits_per_frame += f.voxel_visits_per_frame / frames.size();
     mean.rays_per_frame += f.rays_per_frame / frames.size();
+    mean.conversion_ms += f.conversion_ms / frames.size();
+    mean.bundling_ms += f.bundling_ms / frames.size();
+    mean.walk_ms += f.walk_ms / frames.size();
+    mean.write_ms += f.write_ms / frames.size();
     visits += f.voxel_visits_per_frame;
     hits += f.cache_hit_rate * f.voxel_visits_per_frame;
   }
@@ -486,7 +532,7 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
   result.resolution = resolution;
   result.input = input;
   std::vector<double> ours_ms, plain_ms, discretized_ms;
-  std::vector<double> wall_ms[3];
+  std::vector<double> wall_ms[3], cpu_ms[3];
   for (int r = 0; r < options.repetitions; ++r) {
     // Interleaved, so that the load of a shared machine falls on all three alike.
     omp_set_num_threads(options.threads);  // insertPointCloud resets it
@@ -524,10 +570,9 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
     result.discretized = perFrameMean(discretized_frames);
     for (MapRun* run : {&result.ours, &result.plain, &result.discretized}) {
       run->ms_per_frame = options.cpu_clock ? run->cpu_ms_per_frame : run->wall_ms_per_frame;
-      wall_ms[run == &result.ours    ? 0
-              : run == &result.plain ? 1
-                                     : 2]
-          .push_back(run->wall_ms_per_frame);
+      const int peer = run == &result.ours ? 0 : run == &result.plain ? 1 : 2;
+      wall_ms[peer].push_back(run->wall_ms_per_frame);
+      cpu_ms[peer].push_back(run->cpu_ms_per_frame);
     }
     ours_ms.push_back(result.ours.ms_per_frame);
     plain_ms.push_back(result.plain.ms_per_frame);
@@ -554,6 +599,9 @@ CaseResult runCase(const StereoView& view, const StereoView& truth, double resol
   result.ours.wall_ms_per_frame = bench::median(wall_ms[0]);
   result.plain.wall_ms_per_frame = bench::median(wall_ms[1]);
   result.discretized.wall_ms_per_frame = bench::median(wall_ms[2]);
+  result.ours.cpu_ms_per_frame = bench::median(cpu_ms[0]);
+  result.plain.cpu_ms_per_frame = bench::median(cpu_ms[1]);
+  result.discretized.cpu_ms_per_frame = bench::median(cpu_ms[2]);
   return result;
 }
 
@@ -598,6 +646,21 @@ void printCase(const char* prefix, const CaseResult& c) {
       m.storage.change_log_bytes / 1024.0, c.ours.voxel_visits_per_frame, c.ours.rays_per_frame,
       c.walk_only.cpu_ms_per_frame, c.walk_only.steps_per_frame,
       static_cast<unsigned long long>(m.checksum));
+  // Per CPU beside wall, and where our frame's wall time goes.
+  std::printf(
+      "%stime scene=%s source=%s resolution=%g input=%s cpu_ms_per_frame=%.2f "
+      "octomap_cpu_ms_per_frame=%.2f octomap_discretize_cpu_ms_per_frame=%.2f "
+      "cpu_ratio=%.3f cpu_ratio_discretize=%.3f wall_ms_per_frame=%.2f "
+      "octomap_discretize_wall_ms_per_frame=%.2f wall_ratio_discretize=%.3f "
+      "stage_ms conversion=%.2f bundling=%.2f walks=%.2f writing=%.2f "
+      "bundled_walk_only_cpu_ms_per_frame=%.2f bundled_walk_only_steps_per_frame=%.0f\n",
+      prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(),
+      c.ours.cpu_ms_per_frame, c.plain.cpu_ms_per_frame, c.discretized.cpu_ms_per_frame,
+      c.ours.cpu_ms_per_frame / c.plain.cpu_ms_per_frame,
+      c.ours.cpu_ms_per_frame / c.discretized.cpu_ms_per_frame, c.ours.wall_ms_per_frame,
+      c.discretized.wall_ms_per_frame, c.ours.wall_ms_per_frame / c.discretized.wall_ms_per_frame,
+      c.ours.conversion_ms, c.ours.bundling_ms, c.ours.walk_ms, c.ours.write_ms,
+      c.walk_only.bundled_cpu_ms_per_frame, c.walk_only.bundled_steps_per_frame);
   std::fflush(stdout);
 }
 

@@ -33,6 +33,20 @@ NormalCdfTable::NormalCdfTable() : values_(kSize + 1) {
 }
 
 namespace {
+// Wall time between laps.
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return seconds;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
 // Eq. 3, here so that the ray caster's every step inlines it (an exported function of a shared
 // library is called through the PLT).
 inline double visibilityAfter(double previous, double p_occluded,
@@ -818,6 +832,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   const bool visibility_mode = config_.method == StereoIntegrationMethod::kVisibility;
   std::size_t skipped = 0;
   std::vector<BundledRay> bundles;
+  Stopwatch stopwatch;
   if (config_.bundle_rays) {
     if (given_ends != nullptr) {
       bundles = bundleRaysByEndVoxel(*given_ends, visibility_mode, &skipped);
@@ -828,6 +843,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
       bundles = bundleRaysByEndVoxel(ends, visibility_mode, &skipped);
     }
   }
+  stats.bundling_seconds = stopwatch.lap();
   // Without bundling every slot is a ray; its usability is checked in the parallel loop.
   const int count = static_cast<int>(config_.bundle_rays ? bundles.size() : points_in_map.size());
   // A thread for every 64 rays: a second thread's own tables and memo cost less than the walks
@@ -883,6 +899,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
     hits += caster.counters().cache_hits;
     invisible += caster.counters().rays_invisible;
   }
+  stats.walk_seconds = stopwatch.lap();
   stats.skipped_points = skipped;
   stats.rays = config_.bundle_rays ? bundles.size() : point_count - skipped;
   stats.merged_points = stats.points - skipped - stats.rays;
@@ -892,6 +909,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::computeUpdates(
   if (write_to != nullptr) {
     stats.updated_voxels = writeThreadUpdates(per_thread, frame.origin_voxel, sensor_origin,
                                               UpdateWriter(config_, *write_to), write_to);
+    stats.write_seconds = stopwatch.lap();
     return stats;
   }
   for (int t = 1; t < threads; ++t) per_thread[0].merge(per_thread[t], frame.origin_voxel);
@@ -1008,6 +1026,7 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
   // lattice) run while the other thread converts rows. (The conversion as one task beside the
   // surface's rows would leave its own row tasks to one thread: a thread waiting for its children
   // does not take their children.)
+  Stopwatch stopwatch;
 #pragma omp parallel
 #pragma omp single
   {
@@ -1016,9 +1035,11 @@ StereoIntegrationStats VisibilityStereoIntegrator::integrate(const DisparityImag
         &rays,
         [&] { surface = measuredSurface(disparity, camera, T_map_camera, map->resolution()); });
   }
+  const double conversion_seconds = stopwatch.lap();
   StereoIntegrationStats stats =
       integrateRays(rays.points, rays.range_sigmas, &rays.ends, rays.columns, rays.points_count,
                     T_map_camera.translation(), map, &surface);
+  stats.conversion_seconds = conversion_seconds;
   stats.dropped_uncertain = rays.dropped_uncertain;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;

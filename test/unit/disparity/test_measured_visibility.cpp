@@ -168,5 +168,31 @@ TEST(MeasuredVisibilityTest, NamesAndValidation) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
+TEST(MeasuredVisibilityTest, StageTimesSplitTheCall) {
+  // What a frame's time is spent on: each stage is timed once, in turn, within the call.
+  VoxelMapConfig map_config;
+  map_config.resolution = kResolution;
+  VoxelMap map(map_config);
+  const std::vector<float> image = wallImage(0.0f);
+  const DisparityImageView view{kWidth, kHeight, image.data(), 0};
+  const VisibilityStereoIntegrator integrator(kMeasured);
+  for (int frame = 0; frame < 3; ++frame) {
+    const StereoIntegrationStats stats = integrator.integrate(view, kCamera, cameraPose(), &map);
+    ASSERT_GT(stats.rays, 0u);
+    for (double stage : {stats.conversion_seconds, stats.bundling_seconds, stats.walk_seconds,
+                         stats.write_seconds}) {
+      EXPECT_GT(stage, 0.0);
+    }
+    EXPECT_LE(stats.conversion_seconds + stats.bundling_seconds + stats.walk_seconds +
+                  stats.write_seconds,
+              stats.seconds);
+  }
+  // Points given as points: nothing to convert.
+  const StereoIntegrationStats points = integrator.integrate(
+      {Eigen::Vector3f(2.0f, 0.0f, 1.0f)}, {0.01f}, cameraPose().translation(), &map);
+  EXPECT_EQ(points.conversion_seconds, 0.0);
+  EXPECT_GT(points.walk_seconds, 0.0);
+}
+
 }  // namespace
 }  // namespace occupancy_fusion

@@ -83,6 +83,13 @@ struct StereoIntegrationStats {
   std::size_t cache_hits = 0;      // of those, found through the previous-ray cache
   std::size_t updated_voxels = 0;  // distinct voxels updated (one update each)
   double seconds = 0.0;            // wall time of the call
+  // The call's wall time by stage: the pixels to ray ends (with the measured surface, built
+  // beside them; integrate(disparity image) only), the ends grouped by voxel (bundle_rays), the
+  // walks of the rays, and writing the reduced updates into the map.
+  double conversion_seconds = 0.0;
+  double bundling_seconds = 0.0;
+  double walk_seconds = 0.0;
+  double write_seconds = 0.0;
 
   double cacheHitRate() const {
     return voxel_visits == 0 ? 0.0 : static_cast<double>(cache_hits) / voxel_visits;
