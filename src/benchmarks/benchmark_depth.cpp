@@ -287,13 +287,14 @@ int runDepth(const CommandLine& args) {
       };
       for (const bench::PeerRun& peer :
            bench::runPeers(peer_clouds, peer_origins, resolution, paired)) {
-        char field[200];
+        char field[300];
         std::snprintf(field, sizeof(field),
                       " %s_ms_per_frame=%.2f speedup_%s=%.1f paired_speedup_%s=%.1f "
-                      "%s_memory_mb=%.1f",
+                      "%s_memory_mb=%.1f %s_cpu_ms_per_frame=%.2f cpu_ratio_%s=%.3f",
                       peer.name.c_str(), peer.median_ms, peer.name.c_str(),
                       peer.median_ms / ours.median_ms, peer.name.c_str(), 1.0 / peer.paired_ratio,
-                      peer.name.c_str(), peer.memory_mb);
+                      peer.name.c_str(), peer.memory_mb, peer.name.c_str(), peer.cpu_ms,
+                      peer.name.c_str(), ours.cpu_ms / peer.cpu_ms);
         peer_fields += field;
       }
       omp_set_num_threads(threads);

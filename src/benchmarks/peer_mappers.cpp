@@ -21,14 +21,18 @@ namespace {
 template <typename Insert>
 void timeEach(std::size_t clouds, const PairedInsert& ours, Insert&& insert, PeerRun* run) {
   std::vector<double> ms, ratios;
+  double cpu_ms = 0.0;
   for (std::size_t i = 0; i < clouds; ++i) {
     const double ours_ms = ours ? ours(i) : 0.0;
+    const double cpu_start = threadCpuMilliseconds();
     const Clock::time_point start = Clock::now();
     insert(i);
     ms.push_back(millisecondsSince(start));
+    cpu_ms += threadCpuMilliseconds() - cpu_start;
     if (ours) ratios.push_back(ours_ms / ms.back());
   }
   run->median_ms = median(ms);
+  run->cpu_ms = clouds == 0 ? 0.0 : cpu_ms / clouds;
   if (!ratios.empty()) run->paired_ratio = median(ratios);
 }
 

@@ -31,6 +31,14 @@ inline double processCpuMilliseconds() {
   return 1e3 * static_cast<double>(now.tv_sec) + 1e-6 * static_cast<double>(now.tv_nsec);
 }
 
+// CPU time of the calling thread, ms: a peer that inserts on one thread, measured apart from the
+// other threads' work (an OpenMP team of ours, timed just before, spins a while after its region).
+inline double threadCpuMilliseconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return 1e3 * static_cast<double>(now.tv_sec) + 1e-6 * static_cast<double>(now.tv_nsec);
+}
+
 // The middle value (the mean of the middle two for an even count); 0 for no values.
 inline double median(std::vector<double> values) {
   if (values.empty()) return 0.0;

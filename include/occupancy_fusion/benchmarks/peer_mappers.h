@@ -18,6 +18,7 @@ namespace bench {
 struct PeerRun {
   std::string name;        // e.g. "bonxai", "ufomap_discrete"
   double median_ms = 0.0;  // per cloud, wall
+  double cpu_ms = 0.0;  // per cloud, mean CPU of the inserting thread (every peer inserts on one)
   double memory_mb = 0.0;  // the map's own figure after the last cloud
   // The median over the clouds of ours' time over the peer's, each pair timed back to back
   // (see PairedInsert); NaN without one.
