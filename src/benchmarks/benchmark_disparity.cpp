@@ -648,20 +648,22 @@ void printCase(const char* prefix, const CaseResult& c) {
       c.walk_only.cpu_ms_per_frame, c.walk_only.steps_per_frame,
       static_cast<unsigned long long>(m.checksum));
   // Per CPU beside wall, and where our frame's wall time goes.
-  std::printf(
-      "%stime scene=%s source=%s resolution=%g input=%s cpu_ms_per_frame=%.2f "
-      "octomap_cpu_ms_per_frame=%.2f octomap_discretize_cpu_ms_per_frame=%.2f "
-      "cpu_ratio=%.3f cpu_ratio_discretize=%.3f wall_ms_per_frame=%.2f "
-      "octomap_discretize_wall_ms_per_frame=%.2f wall_ratio_discretize=%.3f "
-      "stage_ms conversion=%.2f bundling=%.2f walks=%.2f writing=%.2f "
-      "bundled_walk_only_cpu_ms_per_frame=%.2f bundled_walk_only_steps_per_frame=%.0f\n",
-      prefix, c.scene.c_str(), c.source.c_str(), c.resolution, toString(c.input).c_str(),
-      c.ours.cpu_ms_per_frame, c.plain.cpu_ms_per_frame, c.discretized.cpu_ms_per_frame,
-      c.ours.cpu_ms_per_frame / c.plain.cpu_ms_per_frame,
-      c.ours.cpu_ms_per_frame / c.discretized.cpu_ms_per_frame, c.ours.wall_ms_per_frame,
-      c.discretized.wall_ms_per_frame, c.ours.wall_ms_per_frame / c.discretized.wall_ms_per_frame,
-      c.ours.conversion_ms, c.ours.bundling_ms, c.ours.walk_ms, c.ours.write_ms,
-      c.walk_only.bundled_cpu_ms_per_frame, c.walk_only.bundled_steps_per_frame);
+  const MapRun& ours = c.ours;
+  std::printf("%stime scene=%s source=%s resolution=%g input=%s", prefix, c.scene.c_str(),
+              c.source.c_str(), c.resolution, toString(c.input).c_str());
+  std::printf(" cpu_ms_per_frame=%.2f octomap_cpu_ms_per_frame=%.2f", ours.cpu_ms_per_frame,
+              c.plain.cpu_ms_per_frame);
+  std::printf(" octomap_discretize_cpu_ms_per_frame=%.2f cpu_ratio=%.3f cpu_ratio_discretize=%.3f",
+              c.discretized.cpu_ms_per_frame, ours.cpu_ms_per_frame / c.plain.cpu_ms_per_frame,
+              ours.cpu_ms_per_frame / c.discretized.cpu_ms_per_frame);
+  std::printf(" wall_ms_per_frame=%.2f octomap_discretize_wall_ms_per_frame=%.2f",
+              ours.wall_ms_per_frame, c.discretized.wall_ms_per_frame);
+  std::printf(" wall_ratio_discretize=%.3f",
+              ours.wall_ms_per_frame / c.discretized.wall_ms_per_frame);
+  std::printf(" stage_ms conversion=%.2f bundling=%.2f walks=%.2f writing=%.2f", ours.conversion_ms,
+              ours.bundling_ms, ours.walk_ms, ours.write_ms);
+  std::printf(" bundled_walk_only_cpu_ms_per_frame=%.2f bundled_walk_only_steps_per_frame=%.0f\n",
+              c.walk_only.bundled_cpu_ms_per_frame, c.walk_only.bundled_steps_per_frame);
   std::fflush(stdout);
 }
 
