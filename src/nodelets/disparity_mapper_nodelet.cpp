@@ -136,6 +136,12 @@ class DisparityMapper : public MapperNodeletBase {
     status.add("last image voxels updated", last_stats_.updated_voxels);
     status.add("last image cache hit rate", last_stats_.cacheHitRate());
     status.add("last image ms", last_stats_.milliseconds());
+    // Where the time went: which setting would shorten it (input_resolution for the conversion,
+    // resolution for the walks).
+    status.add("last image conversion ms", 1e3 * last_stats_.conversion_seconds);
+    status.add("last image bundling ms", 1e3 * last_stats_.bundling_seconds);
+    status.add("last image walks ms", 1e3 * last_stats_.walk_seconds);
+    status.add("last image writing ms", 1e3 * last_stats_.write_seconds);
     status.add("map version", map().voxels().version());
   }
 

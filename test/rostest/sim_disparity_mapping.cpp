@@ -168,6 +168,20 @@ TEST(SimDisparityMapping, MapMatchesGroundTruth) {
            100.0 * free_correct / std::max<std::size_t>(free_cells, 1));
   EXPECT_GE(free_cells, 800u);
   EXPECT_GE(double(free_correct) / free_cells, 0.98);
+
+  // The last image's time by stage: each reported, every stage of a mapped image took time, and
+  // together no longer than the image.
+  const DiagnosticValues values = g_observer->diagnostics(kTask);
+  double stages = 0.0;
+  for (const char* key : {"last image conversion ms", "last image bundling ms",
+                          "last image walks ms", "last image writing ms"}) {
+    const auto value = values.find(key);
+    ASSERT_NE(value, values.end()) << key;
+    EXPECT_GT(std::stod(value->second), 0.0) << key;
+    stages += std::stod(value->second);
+  }
+  ASSERT_NE(values.find("last image ms"), values.end());
+  EXPECT_LE(stages, std::stod(values.at("last image ms")) + 1e-3);
 }
 
 TEST(SimDisparityMapping, MalformedImagesAreDroppedAndTheMapperRunsOn) {
