@@ -232,8 +232,8 @@ std::vector<Eigen::Vector3d> farthestOfEndVoxels(const octomap::Pointcloud& clou
   SpatialKeyMap<std::size_t> of_voxel;
   for (const octomap::point3d& p : cloud) {
     const Eigen::Vector3d point(p.x(), p.y(), p.z());
-    const VoxelIndex voxel = (point / resolution).array().floor().cast<int>();
-    const auto [it, inserted] = of_voxel.try_emplace(packKey(voxel), farthest.size());
+    const auto [it, inserted] =
+        of_voxel.try_emplace(packKey(voxelIndexOf(point, resolution)), farthest.size());
     if (inserted) {
       farthest.push_back(point);
     } else if ((point - origin).squaredNorm() > (farthest[it->second] - origin).squaredNorm()) {

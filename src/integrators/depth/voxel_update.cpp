@@ -358,7 +358,8 @@ bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, doub
   };
   // A surface voxel seen again (most calls): its centre pixel ends in it.
   const float centre = pyramid.at(0, cu, cv);
-  if (isValidMeasurement(centre) && ends_there(centre)) return false;
+  const bool centre_returned = isValidMeasurement(centre);
+  if (centre_returned && ends_there(centre)) return false;
   // The footprint: pixels within a voxel's half diagonal of the centre's projection.
   constexpr int kMaxRadius = 8;  // px: only near voxels reach it; those pixels decide alone
   const double pixels_per_metre = frame.camera.fx / distance;
@@ -381,7 +382,6 @@ bool PyramidDepthIntegrator::seenThrough(const DepthFrame& frame, double u, doub
     const float measured = pyramid.at(0, pu, pv);
     return isValidMeasurement(measured) && beyond(measured) && !ends_there(measured);
   };
-  const bool centre_returned = isValidMeasurement(centre);
   bool passed = centre_returned && beyond(centre);
   const double spacing = 0.7 * inner;  // the grid's corners within the disc
   for (int j = -1; j <= 1 && !passed; ++j) {
